@@ -1,0 +1,27 @@
+#pragma once
+// JSON scene files (comments allowed), format version 1. Every key is
+// documented in docs/scene-format.md. Errors name the file, the key path,
+// the value and the rule:
+//   scene.json: eyes[0].cornea.radius_mm = -7.8: must be > 0
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "purkinje/models/scene.h"
+
+namespace purkinje {
+
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr int kSceneFormatVersion = 1;
+
+// Reads and validates a scene file; throws SceneError.
+Scene load_scene(const std::filesystem::path& file);
+// Parses scene text; `source_name` is used in error messages.
+Scene parse_scene(const std::string& text, const std::string& source_name);
+
+}  // namespace purkinje

@@ -1,0 +1,71 @@
+#pragma once
+// The specular-path solver: the point on a corneal surface where a light
+// path obeys the law of reflection (glints) or Snell's law (the pupil and
+// iris seen through the cornea, light reaching the iris). All inputs and
+// outputs are in world coordinates, millimetres and radians.
+//
+// A path that does not exist is a status, never a NaN.
+
+#include <optional>
+
+#include "purkinje/models/eye.h"
+#include "purkinje/models/geometry.h"
+
+namespace purkinje {
+
+enum class PathStatus {
+  ok,
+  no_solution,                // no stationary path on the visible part of the surface
+  total_internal_reflection,  // the path would have to leave the cornea beyond the critical angle
+  off_cornea,                 // the path exists but crosses the surface beyond the limbus
+  behind_camera,
+  outside_image,
+  occluded,
+  not_converged,              // iteration stopped without meeting the tolerance
+  invalid_input,              // e.g. an outer point inside the eye, a pupil point outside the cornea
+};
+const char* to_string(PathStatus s);
+
+// Light from `source` reflected by the anterior cornea toward `target`.
+struct Reflection {
+  PathStatus status = PathStatus::no_solution;
+  Point3 point;  // on the anterior cornea
+  UnitVector3 normal = UnitVector3::unit_z();     // outward surface normal at point
+  UnitVector3 incident = UnitVector3::unit_z();   // from source to point
+  UnitVector3 reflected = UnitVector3::unit_z();  // from point to target
+  double incidence_rad = 0;                        // between -incident and normal
+  bool on_cap = false;
+  int iterations = 0;
+};
+
+// Light from `inner` (inside the eye, e.g. a pupil-border point) refracted
+// by the cornea toward `outer` (a camera centre or a light).
+struct Refraction {
+  PathStatus status = PathStatus::no_solution;
+  Point3 anterior_point;                  // where the path crosses the anterior cornea
+  std::optional<Point3> posterior_point;  // and the posterior one, for two-surface eyes
+  UnitVector3 anterior_normal = UnitVector3::unit_z();  // outward
+  UnitVector3 inner_direction = UnitVector3::unit_z();  // inside the eye, toward anterior_point
+  UnitVector3 outer_direction = UnitVector3::unit_z();  // from anterior_point to outer
+  double inner_angle_rad = 0;  // angle to the normal inside the anterior surface
+  double outer_angle_rad = 0;  // angle to the normal in air
+  bool on_cap = false;
+  int iterations = 0;
+};
+
+// Law of reflection, anterior cornea only (the first Purkinje image).
+// `source` and `target` must lie outside the cornea.
+Reflection solve_reflection(const Eye& eye, const Point3& source, const Point3& target);
+
+// Snell's law at the anterior cornea, and also at the posterior cornea when
+// the eye model has one. `inner` must lie inside the aqueous humour.
+Refraction solve_refraction(const Eye& eye, const Point3& inner, const Point3& outer);
+
+// Residuals for tests and diagnostics (radians).
+// Angle between the reflected direction and the mirror image of the incident one.
+double reflection_residual_rad(const Reflection& r);
+// Angle between the outer direction and Snell's refraction of the inner one
+// (at the anterior surface), for the eye's indices.
+double refraction_residual_rad(const Eye& eye, const Refraction& r);
+
+}  // namespace purkinje

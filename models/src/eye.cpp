@@ -1,0 +1,135 @@
+#include "purkinje/models/eye.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace purkinje {
+namespace {
+
+// Depth from the apex of a conicoid at radial distance r; nullopt-like -1
+// beyond the surface's reach (never reached for validated models).
+double conicoid_depth(const Conicoid& s, double r) {
+  const double disc = s.radius_mm * s.radius_mm - (1.0 + s.asphericity) * r * r;
+  if (disc < 0) return -1.0;
+  // r^2 / (R + sqrt(disc)) is the cancellation-free root of the conic.
+  return r * r / (s.radius_mm + std::sqrt(disc));
+}
+
+// The visual axis in the eye frame.
+Vector3 visual_axis_in_eye(const EyeModel& m) {
+  const double h = m.kappa_horizontal_rad, v = m.kappa_vertical_rad;
+  return {std::sin(h) * std::cos(v), std::sin(v), std::cos(h) * std::cos(v)};
+}
+
+// The optical axis whose eye frame maps the model's visual axis onto `visual`.
+// The frame depends smoothly on the optical axis, so fixed-point iteration
+// on the small kappa rotation converges in a few steps.
+UnitVector3 optical_axis_for_visual_axis(const EyeModel& m, const UnitVector3& visual) {
+  const Vector3 v_eye = visual_axis_in_eye(m);
+  UnitVector3 o = visual;
+  for (int i = 0; i < 100; ++i) {
+    const UnitVector3 v_now = UnitVector3::normalize(world_from_eye_rotation(o) * v_eye);
+    const Vector3 axis = cross(v_now, visual);
+    const double angle = angle_between(v_now, visual);
+    if (angle < 1e-15) return o;
+    o = rotate(o, UnitVector3::normalize(axis), angle);
+  }
+  return o;
+}
+
+}  // namespace
+
+double EyeModel::limbus_depth_mm() const { return conicoid_depth(anterior_cornea, limbus_radius_mm); }
+
+UnitVector3 optical_axis_from_yaw_pitch(double yaw, double pitch) {
+  return UnitVector3::normalize(
+      {std::sin(yaw) * std::cos(pitch), -std::sin(pitch), -std::cos(yaw) * std::cos(pitch)});
+}
+
+Rotation world_from_eye_rotation(const UnitVector3& o) {
+  Vector3 ref{1, 0, 0};
+  if (std::abs(o.x()) > 1.0 - 1e-6) ref = {0, 1, 0};
+  const UnitVector3 x = UnitVector3::normalize(ref - o.vector() * dot(ref, o));
+  const UnitVector3 y = UnitVector3::normalize(cross(o, x));
+  return Rotation::from_columns(x, y, o);
+}
+
+Eye::Eye(EyeModel model, const Pose& world_from_eye)
+    : model_(std::move(model)), world_from_eye_(world_from_eye),
+      eye_from_world_(world_from_eye.inverse()) {}
+
+Eye Eye::with_cornea_center(EyeModel model, const Point3& c, const UnitVector3& o) {
+  return Eye(std::move(model), Pose(world_from_eye_rotation(o), c.from_origin()));
+}
+
+Eye Eye::with_rotation_center(EyeModel model, const Point3& rc, const UnitVector3& o) {
+  // The rotation centre sits at z = R - depth in the eye frame.
+  const double back = model.rotation_center_depth_mm - model.anterior_cornea.radius_mm;
+  return with_cornea_center(std::move(model), rc + o.vector() * back, o);
+}
+
+Eye Eye::fixating_from_cornea_center(EyeModel model, const Point3& c, const Point3& target) {
+  auto visual = UnitVector3::try_normalize(target - c);
+  if (!visual) throw std::invalid_argument("gaze target coincides with the cornea centre");
+  const UnitVector3 o = optical_axis_for_visual_axis(model, *visual);
+  return with_cornea_center(std::move(model), c, o);
+}
+
+Eye Eye::fixating(EyeModel model, const Point3& rc, const Point3& target) {
+  const double back = model.rotation_center_depth_mm - model.anterior_cornea.radius_mm;
+  // The cornea centre moves with the eye; a target closer than twice the
+  // rotation radius has no stable fixation for this model.
+  if (distance(target, rc) <= 2.0 * std::abs(back) + model.anterior_cornea.radius_mm) {
+    std::ostringstream msg;
+    msg << "gaze target is " << distance(target, rc)
+        << " mm from the centre of rotation: too close to fixate";
+    throw std::invalid_argument(msg.str());
+  }
+  UnitVector3 o = UnitVector3::normalize(target - rc);
+  for (int i = 0; i < 200; ++i) {
+    const Point3 c = rc + o.vector() * back;
+    const UnitVector3 next =
+        optical_axis_for_visual_axis(model, UnitVector3::normalize(target - c));
+    const double change = angle_between(next, o);
+    o = next;
+    if (change < 1e-15) break;
+  }
+  return with_cornea_center(std::move(model), rc + o.vector() * back, o);
+}
+
+Point3 Eye::cornea_center() const { return world_from_eye_ * Point3::origin(); }
+
+Point3 Eye::rotation_center() const {
+  return world_from_eye_ *
+         Point3{0, 0, model_.anterior_cornea.radius_mm - model_.rotation_center_depth_mm};
+}
+
+Point3 Eye::corneal_apex() const {
+  return world_from_eye_ * Point3{0, 0, model_.anterior_cornea.radius_mm};
+}
+
+UnitVector3 Eye::optical_axis() const { return world_from_eye_.rotation().column(2); }
+
+UnitVector3 Eye::visual_axis() const {
+  return UnitVector3::normalize(world_from_eye_ * visual_axis_in_eye(model_));
+}
+
+Point3 Eye::pupil_center() const {
+  return world_from_eye_ * Point3{model_.pupil_decentration_x_mm, model_.pupil_decentration_y_mm,
+                                  model_.anterior_cornea.radius_mm - model_.iris_depth_mm};
+}
+
+Point3 Eye::pupil_border_point(double angle) const {
+  const double r = model_.pupil_radius_mm;
+  return world_from_eye_ * Point3{model_.pupil_decentration_x_mm + r * std::cos(angle),
+                                  model_.pupil_decentration_y_mm + r * std::sin(angle),
+                                  model_.anterior_cornea.radius_mm - model_.iris_depth_mm};
+}
+
+bool Eye::on_cap(const Point3& world_point) const {
+  const Point3 p = eye_from_world_ * world_point;
+  return model_.anterior_cornea.radius_mm - p.z < model_.limbus_depth_mm();
+}
+
+}  // namespace purkinje

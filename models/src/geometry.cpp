@@ -1,0 +1,37 @@
+#include "purkinje/models/geometry.h"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace purkinje {
+
+std::optional<UnitVector3> UnitVector3::try_normalize(const Vector3& v) {
+  const double n = v.norm();
+  if (!(n > 0.0) || !std::isfinite(n)) return std::nullopt;
+  return UnitVector3(v / n);
+}
+
+UnitVector3 UnitVector3::normalize(const Vector3& v) {
+  if (auto u = try_normalize(v)) return *u;
+  std::ostringstream msg;
+  msg << "cannot normalize vector (" << v.x << ", " << v.y << ", " << v.z << ") of norm "
+      << v.norm();
+  throw std::invalid_argument(msg.str());
+}
+
+UnitVector3 UnitVector3::from(const Vector3& v) {
+  const double n = v.norm();
+  if (!(std::abs(n - 1.0) <= 1e-9)) {
+    std::ostringstream msg;
+    msg.precision(17);
+    msg << "not a unit vector: (" << v.x << ", " << v.y << ", " << v.z << ") has norm " << n;
+    throw std::invalid_argument(msg.str());
+  }
+  return UnitVector3(v);
+}
+
+double angle_between(const Vector3& a, const Vector3& b) {
+  return std::atan2(cross(a, b).norm(), dot(a, b));
+}
+
+}  // namespace purkinje

@@ -1,0 +1,102 @@
+#include "purkinje/models/truth.h"
+
+#include <cmath>
+
+namespace purkinje {
+namespace {
+
+constexpr double kTwoPi = 6.28318530717958647692;
+
+// A path status after the camera has looked at its end point.
+PathStatus with_projection(PathStatus path, const Projection& p) {
+  if (path != PathStatus::ok) return path;
+  switch (p.status) {
+    case ProjectionStatus::ok: return PathStatus::ok;
+    case ProjectionStatus::behind_camera: return PathStatus::behind_camera;
+    case ProjectionStatus::outside_image: return PathStatus::outside_image;
+  }
+  return PathStatus::no_solution;
+}
+
+bool has_pixel(PathStatus path, const Projection& p) {
+  return (path == PathStatus::ok || path == PathStatus::off_cornea) &&
+         p.status != ProjectionStatus::behind_camera;
+}
+
+}  // namespace
+
+RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
+  RefractedImage out;
+  out.path = solve_refraction(eye, inner, camera.center());
+  if (out.path.status != PathStatus::ok && out.path.status != PathStatus::off_cornea) {
+    out.status = out.path.status;
+    return out;
+  }
+  const Projection p = camera.project(out.path.anterior_point);
+  if (has_pixel(out.path.status, p)) out.pixel = p.pixel;
+  out.status = with_projection(out.path.status, p);
+  return out;
+}
+
+SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
+  SceneTruth truth;
+  for (const Eye& eye : scene.eyes) {
+    EyeTruth e;
+    e.cornea_center = eye.cornea_center();
+    e.rotation_center = eye.rotation_center();
+    e.pupil_center = eye.pupil_center();
+    e.optical_axis = eye.optical_axis();
+    e.visual_axis = eye.visual_axis();
+    e.cornea_radius_mm = eye.model().anterior_cornea.radius_mm;
+    e.pupil_radius_mm = eye.model().pupil_radius_mm;
+    truth.eyes.push_back(e);
+  }
+  for (int c = 0; c < static_cast<int>(scene.cameras.size()); ++c) {
+    const Camera& camera = scene.cameras[c];
+    for (int e = 0; e < static_cast<int>(scene.eyes.size()); ++e) {
+      const Eye& eye = scene.eyes[e];
+      EyeInCameraTruth view;
+      view.camera = c;
+      view.eye = e;
+      for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
+        GlintTruth g;
+        g.illuminator = l;
+        g.reflection = solve_reflection(eye, scene.illuminators[l].position, camera.center());
+        g.status = g.reflection.status;
+        if (g.status == PathStatus::ok || g.status == PathStatus::off_cornea) {
+          const Projection p = camera.project(g.reflection.point);
+          if (has_pixel(g.status, p)) g.pixel = p.pixel;
+          g.status = with_projection(g.status, p);
+        }
+        view.glints.push_back(g);
+      }
+      std::vector<Pixel> ok_pixels;
+      for (int k = 0; k < options.pupil_border_points; ++k) {
+        PupilBorderPointTruth b;
+        b.angle_rad = kTwoPi * k / options.pupil_border_points;
+        b.border_point = eye.pupil_border_point(b.angle_rad);
+        const RefractedImage img = image_through_cornea(eye, camera, b.border_point);
+        b.status = img.status;
+        b.pixel = img.pixel;
+        b.refraction = img.path;
+        if (b.status == PathStatus::ok) ok_pixels.push_back(b.pixel);
+        view.pupil.border.push_back(b);
+      }
+      if (auto ellipse = fit_ellipse(ok_pixels)) {
+        view.pupil.ellipse_valid = true;
+        view.pupil.ellipse = *ellipse;
+      }
+      const RefractedImage centre = image_through_cornea(eye, camera, eye.pupil_center());
+      view.pupil.refracted_center_status = centre.status;
+      view.pupil.refracted_center = centre.pixel;
+      view.pupil.refracted_center_path = centre.path;
+      view.pupil.unrefracted_center = camera.project(eye.pupil_center());
+      view.cornea_center = camera.project(eye.cornea_center());
+      view.rotation_center = camera.project(eye.rotation_center());
+      truth.views.push_back(std::move(view));
+    }
+  }
+  return truth;
+}
+
+}  // namespace purkinje

@@ -1,0 +1,2 @@
+// Placeholder; the truth command arrives next.
+int main() { return 0; }

@@ -314,6 +314,15 @@ bool solve_chain(const std::array<Surface, M>& surfaces, const Vector3& end_a,
   return gmax < 1e-11;
 }
 
+// Chart coordinates of a start point, pulled inside the chart's domain
+// (oblate conicoids end at their equator, r = R / sqrt(1 + Q)).
+std::array<double, 2> chart_start(const Surface& s, const Vector3& p) {
+  const double r = std::hypot(p.x, p.y);
+  const double limit = s.one_plus_q() > 0 ? 0.999 * s.radius() / std::sqrt(s.one_plus_q()) : r;
+  const double k = r > limit ? limit / r : 1.0;
+  return {p.x * k, p.y * k};
+}
+
 Surface anterior_surface(const EyeModel& m) {
   return {m.anterior_cornea.radius_mm, m.anterior_cornea};
 }
@@ -363,10 +372,13 @@ Reflection solve_reflection(const Eye& eye, const Point3& source_w, const Point3
     return out;
   }
   if (!m.anterior_cornea.is_sphere()) {
-    std::array<double, 2> xy{x.x, x.y};
+    std::array<double, 2> xy = chart_start(s, x);
     int it = 0;
     if (!solve_chain<1>({s}, source, target, {1.0, 1.0}, xy, it)) {
-      out.status = PathStatus::not_converged;
+      // An oblate cornea is a graph over the iris plane only up to its
+      // equator; a path that needs more lies far beyond the limbus.
+      out.status = std::hypot(xy[0], xy[1]) > m.limbus_radius_mm ? PathStatus::no_solution
+                                                                  : PathStatus::not_converged;
       out.iterations += it;
       return out;
     }
@@ -451,7 +463,7 @@ Refraction solve_refraction(const Eye& eye, const Point3& inner_w, const Point3&
     }
     out.posterior_point = world_point(eye, x2);
   } else if (!m.anterior_cornea.is_sphere()) {
-    std::array<double, 2> xy{x1.x, x1.y};
+    std::array<double, 2> xy = chart_start(front, x1);
     int it = 0;
     const bool ok = solve_chain<1>({front}, outer, inner, {1.0, m.aqueous_index}, xy, it);
     out.iterations += it;

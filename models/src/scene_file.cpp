@@ -1,0 +1,764 @@
+// Scene files: JSON with comments, read through a small typed reader that
+// knows the path of every value, marks every key it reads and rejects the
+// keys nobody read. Every key and rule is documented in docs/scene-format.md.
+
+#include "purkinje/models/scene_file.h"
+
+#include <algorithm>
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+namespace purkinje {
+namespace {
+
+using json = nlohmann::json;
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr int kMaxResolutionPx = 65536;
+constexpr double kMaxCoordinateMm = 1e6;
+
+// Shortest text that reads back as the same double; "inf" and "nan" spelled out.
+std::string format_number(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, result.ptr);
+}
+
+// A value as the user wrote it, short enough for one line of a message.
+std::string format_value(const json& v) {
+  std::string text;
+  switch (v.type()) {
+    case json::value_t::number_float: text = format_number(v.get<double>()); break;
+    case json::value_t::array: {
+      text = "[";
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        if (i > 0) text += ", ";
+        if (i == 8) {
+          text += "...";
+          break;
+        }
+        text += format_value(v[i]);
+      }
+      text += "]";
+      break;
+    }
+    case json::value_t::object: text = v.empty() ? "{}" : "{...}"; break;
+    default: text = v.dump(); break;
+  }
+  if (text.size() > 80) text = text.substr(0, 77) + "...";
+  return text;
+}
+
+std::string format_point(const Point3& p) {
+  return "[" + format_number(p.x) + ", " + format_number(p.y) + ", " + format_number(p.z) + "]";
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
+  return out;
+}
+
+// Whether `typed` could be a misspelling of `wanted`: a prefix of it
+// ("radius" for "radius_mm") or at most two edits away (Levenshtein).
+bool looks_like(const std::string& typed, const std::string& wanted) {
+  if (typed.empty()) return false;
+  if (wanted.starts_with(typed) || typed.starts_with(wanted)) return true;
+  std::vector<std::size_t> row(wanted.size() + 1);
+  for (std::size_t j = 0; j <= wanted.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= typed.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= wanted.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1,
+                         diagonal + (typed[i - 1] == wanted[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[wanted.size()] <= 2;
+}
+
+// Where a value lives in the file: the source's name and the key path.
+struct Location {
+  const std::string* source;
+  std::string path;
+
+  Location child(std::string_view key) const {
+    return {source, path.empty() ? std::string(key) : path + "." + std::string(key)};
+  }
+  Location element(std::size_t i) const { return {source, path + "[" + std::to_string(i) + "]"}; }
+
+  // "FILE: path = VALUE: rule"; `value_text` empty for a key with no value.
+  [[noreturn]] void fail(const std::string& value_text, const std::string& rule) const {
+    std::string message = *source + ": " + (path.empty() ? "(top level)" : path);
+    if (!value_text.empty()) message += " = " + value_text;
+    throw SceneError(message + ": " + rule);
+  }
+  [[noreturn]] void fail_number(double value, const std::string& rule) const {
+    fail(format_number(value), rule);
+  }
+};
+
+// One JSON value and its location, with typed conversions that fail with
+// the path, the value and the expected type.
+class Value {
+ public:
+  Value(const json& j, Location where) : j_(&j), where_(std::move(where)) {}
+
+  const json& raw() const { return *j_; }
+  const Location& where() const { return where_; }
+  [[noreturn]] void fail(const std::string& rule) const { where_.fail(format_value(*j_), rule); }
+
+  double as_double() const {
+    if (!j_->is_number()) fail("must be a number");
+    const double v = j_->get<double>();
+    if (!std::isfinite(v)) fail("must be a finite number");
+    return v;
+  }
+  int as_int() const {
+    if (j_->is_number_unsigned()) {
+      if (j_->get<std::uint64_t>() > static_cast<std::uint64_t>(INT_MAX)) fail("is too large");
+      return static_cast<int>(j_->get<std::uint64_t>());
+    }
+    if (j_->is_number_integer()) {
+      const auto v = j_->get<std::int64_t>();
+      if (v < INT_MIN || v > INT_MAX) fail("is out of range");
+      return static_cast<int>(v);
+    }
+    const double v = as_double();
+    if (v != std::floor(v)) fail("must be an integer");
+    if (v < INT_MIN || v > INT_MAX) fail("is out of range");
+    return static_cast<int>(v);
+  }
+  std::string as_string() const {
+    if (!j_->is_string()) fail("must be a string");
+    return j_->get<std::string>();
+  }
+  std::vector<Value> elements() const {
+    if (!j_->is_array()) fail("must be an array");
+    std::vector<Value> out;
+    for (std::size_t i = 0; i < j_->size(); ++i) out.emplace_back((*j_)[i], where_.element(i));
+    return out;
+  }
+  std::vector<double> as_numbers(std::size_t count) const {
+    const std::string rule = "must be an array of " + std::to_string(count) + " numbers";
+    if (!j_->is_array() || j_->size() != count) fail(rule);
+    std::vector<double> out;
+    for (const Value& e : elements()) out.push_back(e.as_double());
+    return out;
+  }
+  // Positions far beyond any tracker would only overflow squared distances.
+  Point3 as_point3() const {
+    const auto v = bounded_triple();
+    return {v[0], v[1], v[2]};
+  }
+  Vector3 as_vector3() const {
+    const auto v = bounded_triple();
+    return {v[0], v[1], v[2]};
+  }
+
+  // Range rules, naming the value.
+  double positive() const {
+    const double v = as_double();
+    if (!(v > 0)) fail("must be > 0");
+    return v;
+  }
+  double non_negative() const {
+    const double v = as_double();
+    if (!(v >= 0)) fail("must be >= 0");
+    return v;
+  }
+  double refractive_index() const {
+    const double v = as_double();
+    if (!(v >= 1)) fail("must be >= 1 (a refractive index)");
+    return v;
+  }
+  std::vector<double> bounded_triple() const {
+    const auto v = as_numbers(3);
+    for (double c : v) {
+      if (std::abs(c) > kMaxCoordinateMm) {
+        fail("coordinates must be within +-" + format_number(kMaxCoordinateMm) + " (1 km in mm)");
+      }
+    }
+    return v;
+  }
+  double within(double low, double high) const {
+    const double v = as_double();
+    if (!(v >= low && v <= high)) {
+      fail("must be between " + format_number(low) + " and " + format_number(high));
+    }
+    return v;
+  }
+
+ private:
+  const json* j_;
+  Location where_;
+};
+
+// A JSON object whose keys are read by name. Every key asked about (even
+// through has()) is known; finish() rejects the keys nobody asked about.
+class Object {
+ public:
+  explicit Object(const Value& v) : self_(v) {
+    if (!v.raw().is_object()) v.fail("must be an object");
+  }
+
+  const Location& where() const { return self_.where(); }
+
+  bool has(const std::string& key) {
+    known_.insert(key);
+    return self_.raw().contains(key);
+  }
+  std::optional<Value> optional(const std::string& key) {
+    if (!has(key)) return std::nullopt;
+    return Value(self_.raw().at(key), where().child(key));
+  }
+  Value required(const std::string& key, const std::string& what = "") {
+    if (auto v = optional(key)) return *v;
+    std::string rule = "missing required key";
+    if (!what.empty()) rule += " (" + what + ")";
+    where().child(key).fail("", rule + misspelling_hint({key}));
+  }
+  Object object(const std::string& key) { return Object(required(key)); }
+  std::optional<Object> optional_object(const std::string& key) {
+    if (auto v = optional(key)) return Object(*v);
+    return std::nullopt;
+  }
+
+  // Typed reads: get<double>("radius_mm") for a required key, get_or for
+  // an optional one. The type's own rule (finite number, integer, three
+  // coordinates, ...) is checked; range rules follow below.
+  template <class T>
+  T get(const std::string& key) {
+    return convert<T>(required(key));
+  }
+  template <class T>
+  T get_or(const std::string& key, const T& fallback) {
+    if (auto v = optional(key)) return convert<T>(*v);
+    return fallback;
+  }
+
+  // Optional numbers with a default, range-checked when present.
+  double positive_or(const std::string& key, double fallback) {
+    if (auto v = optional(key)) return v->positive();
+    return fallback;
+  }
+  double non_negative_or(const std::string& key, double fallback) {
+    if (auto v = optional(key)) return v->non_negative();
+    return fallback;
+  }
+
+  // Exactly one of `a` and `b`; returns true for `a`.
+  bool one_of(const std::string& a, const std::string& b) {
+    const bool has_a = has(a), has_b = has(b);
+    if (has_a && has_b) {
+      where().fail("", "give exactly one of " + a + " and " + b + ", not both");
+    }
+    if (!has_a && !has_b) {
+      where().fail("", "missing required key: give one of " + a + " and " + b +
+                           misspelling_hint({a, b}));
+    }
+    return has_a;
+  }
+
+  void finish() const {
+    for (const auto& [key, value] : self_.raw().items()) {
+      if (known_.count(key)) continue;
+      std::vector<std::string> valid(known_.begin(), known_.end());
+      Value(value, where().child(key)).fail("unknown key (valid keys here: " + join(valid) + ")");
+    }
+  }
+
+ private:
+  // "; found \"positon\"" when an unread key here looks like a wanted one,
+  // so that a typo is reported as such and not only as a missing key.
+  std::string misspelling_hint(const std::vector<std::string>& wanted) const {
+    std::vector<std::string> similar;
+    for (const auto& [key, value] : self_.raw().items()) {
+      if (known_.count(key)) continue;
+      for (const auto& w : wanted) {
+        if (looks_like(key, w)) {
+          similar.push_back("\"" + key + "\"");
+          break;
+        }
+      }
+    }
+    return similar.empty() ? "" : "; found " + join(similar) + " (misspelt?)";
+  }
+
+  template <class T>
+  static T convert(const Value& v) {
+    if constexpr (std::is_same_v<T, double>) return v.as_double();
+    else if constexpr (std::is_same_v<T, int>) return v.as_int();
+    else if constexpr (std::is_same_v<T, std::string>) return v.as_string();
+    else if constexpr (std::is_same_v<T, Point3>) return v.as_point3();
+    else if constexpr (std::is_same_v<T, Vector3>) return v.as_vector3();
+    else static_assert(sizeof(T) == 0, "no conversion from JSON to this type");
+  }
+
+  Value self_;
+  std::set<std::string> known_;
+};
+
+// ---------------------------------------------------------------- cameras
+
+Camera read_camera(Object& c, std::size_t index) {
+  const std::string name = c.get_or<std::string>("name", "cam" + std::to_string(index));
+  if (name.empty()) c.required("name").fail("must not be empty");
+
+  const Value resolution = c.required("resolution_px", "[width, height]");
+  if (!resolution.raw().is_array() || resolution.raw().size() != 2) {
+    resolution.fail("must be an array of 2 integers [width, height]");
+  }
+  int size[2];
+  for (int i = 0; i < 2; ++i) {
+    const Value e = resolution.elements()[i];
+    size[i] = e.as_int();
+    if (size[i] < 1) e.fail("must be >= 1");
+    if (size[i] > kMaxResolutionPx) e.fail("must be <= " + std::to_string(kMaxResolutionPx));
+  }
+  const int width = size[0], height = size[1];
+
+  Intrinsics intrinsics;
+  if (c.one_of("focal_length_mm", "intrinsics_px")) {
+    const double focal = c.required("focal_length_mm").positive();
+    const double pitch = c.required("pixel_pitch_mm", "needed with focal_length_mm").positive();
+    intrinsics = Intrinsics::from_focal_length(focal, pitch, width, height);
+  } else {
+    if (c.has("pixel_pitch_mm")) {
+      c.required("pixel_pitch_mm").fail("not used with intrinsics_px (give focal_length_mm instead)");
+    }
+    Object k = c.object("intrinsics_px");
+    intrinsics.width = width;
+    intrinsics.height = height;
+    intrinsics.fx = k.required("fx").positive();
+    intrinsics.fy = k.required("fy").positive();
+    intrinsics.cx = k.get_or<double>("cx", (width - 1) / 2.0);
+    intrinsics.cy = k.get_or<double>("cy", (height - 1) / 2.0);
+    k.finish();
+  }
+
+  Distortion distortion;
+  if (auto d = c.optional_object("distortion")) {
+    distortion.k1 = d->get_or<double>("k1", 0.0);
+    distortion.k2 = d->get_or<double>("k2", 0.0);
+    distortion.p1 = d->get_or<double>("p1", 0.0);
+    distortion.p2 = d->get_or<double>("p2", 0.0);
+    distortion.k3 = d->get_or<double>("k3", 0.0);
+    d->finish();
+  }
+
+  const Point3 position = c.get<Point3>("position_mm");
+  Pose world_from_camera;
+  if (c.one_of("look_at_mm", "rotation_vector_deg")) {
+    const Value look_at = c.required("look_at_mm");
+    const Point3 target = look_at.as_point3();
+    const Vector3 forward = target - position;
+    if (!(forward.norm() > 0)) look_at.fail("must differ from position_mm");
+    Vector3 up{0, -1, 0};
+    if (auto u = c.optional("up")) {
+      up = u->as_vector3();
+      if (!(up.norm() > 0)) u->fail("must not be the zero vector");
+      if (cross(forward / forward.norm(), up / up.norm()).norm() < 1e-6) {
+        u->fail("must not be parallel to the viewing direction (look_at_mm - position_mm)");
+      }
+    } else if (cross(forward / forward.norm(), up).norm() < 1e-6) {
+      look_at.fail("looks straight along the default up [0, -1, 0]: give \"up\"");
+    }
+    world_from_camera = camera_looking_at(position, target, up);
+  } else {
+    if (c.has("up")) c.required("up").fail("only used with look_at_mm");
+    const Vector3 degrees = c.get<Vector3>("rotation_vector_deg");
+    world_from_camera = Pose(Rotation::from_rotation_vector(degrees * kDegree), position.from_origin());
+  }
+  c.finish();
+  return Camera(name, intrinsics, distortion, world_from_camera);
+}
+
+// ----------------------------------------------------------- illuminators
+
+Illuminator read_illuminator(Object& l, std::size_t index) {
+  Illuminator out;
+  out.name = l.get_or<std::string>("name", "led" + std::to_string(index));
+  if (out.name.empty()) l.required("name").fail("must not be empty");
+  out.position = l.get<Point3>("position_mm");
+  out.radiant_intensity_w_sr = l.non_negative_or("radiant_intensity_w_sr", out.radiant_intensity_w_sr);
+  out.wavelength_nm = l.positive_or("wavelength_nm", out.wavelength_nm);
+  out.emitter_diameter_mm = l.non_negative_or("emitter_diameter_mm", out.emitter_diameter_mm);
+  l.finish();
+  return out;
+}
+
+// ------------------------------------------------------------------- eyes
+
+// Depth below the apex of a conicoid at distance r from its axis; nullopt
+// where the surface does not reach r.
+std::optional<double> sag_mm(const Conicoid& s, double r) {
+  const double disc = s.radius_mm * s.radius_mm - (1.0 + s.asphericity) * r * r;
+  if (disc < 0) return std::nullopt;
+  return r * r / (s.radius_mm + std::sqrt(disc));  // cancellation-free root
+}
+
+// The largest distance from the axis over which a conicoid stays a
+// single-valued graph; infinite for paraboloids and hyperboloids.
+double graph_radius_mm(const Conicoid& s) {
+  if (s.asphericity <= -1.0) return INFINITY;
+  return s.radius_mm / std::sqrt(1.0 + s.asphericity);
+}
+
+// Anatomy that no single key can get wrong: the keys interact.
+void check_eye_model(const EyeModel& m, const Location& eye) {
+  const double limbus = m.limbus_radius_mm;
+  const Conicoid& front = m.anterior_cornea;
+  if (!(limbus < graph_radius_mm(front))) {
+    eye.child("cornea").child("limbus_radius_mm")
+        .fail_number(limbus, "must be < radius_mm / sqrt(1 + asphericity) = " +
+                                 format_number(graph_radius_mm(front)) +
+                                 " mm, where the cornea stops being a single-valued cap");
+  }
+
+  // The inner surface of the cornea, as depth below the anterior apex.
+  auto inner_depth = [&](double r) -> std::optional<double> {
+    if (!m.posterior_cornea) return sag_mm(front, r);
+    const auto back = sag_mm(m.posterior_cornea->surface, r);
+    if (!back) return std::nullopt;
+    return m.posterior_cornea->thickness_mm + *back;
+  };
+
+  if (m.posterior_cornea) {
+    const PosteriorCornea& p = *m.posterior_cornea;
+    const Location where = eye.child("posterior_cornea");
+    if (!(limbus < graph_radius_mm(p.surface))) {
+      where.child("radius_mm").fail_number(
+          p.surface.radius_mm, "the posterior cornea must reach the limbus (limbus_radius_mm = " +
+                                   format_number(limbus) + ") as a single-valued surface");
+    }
+    // Sampling finely is exact enough here: the two sags are smooth and a
+    // crossing that fits between samples would be thinner than a micron.
+    constexpr int kSamples = 2000;
+    for (int i = 0; i <= kSamples; ++i) {
+      const double r = limbus * i / kSamples;
+      const double thickness = *inner_depth(r) - *sag_mm(front, r);
+      if (!(thickness > 0)) {
+        where.child("thickness_mm").fail_number(
+            p.thickness_mm, "the posterior cornea crosses the anterior one " + format_number(r) +
+                                " mm from the axis, inside the limbus (" + format_number(limbus) +
+                                " mm)");
+      }
+    }
+  }
+
+  const Location iris = eye.child("iris");
+  const Location pupil = eye.child("pupil");
+  if (!(m.iris_radius_mm <= limbus)) {
+    iris.child("radius_mm").fail_number(
+        m.iris_radius_mm, "must be <= cornea.limbus_radius_mm (" + format_number(limbus) + ")");
+  }
+  if (!(m.pupil_radius_mm < m.iris_radius_mm)) {
+    pupil.child("radius_mm").fail_number(
+        m.pupil_radius_mm, "must be < iris.radius_mm (" + format_number(m.iris_radius_mm) + ")");
+  }
+  const double decentration = std::hypot(m.pupil_decentration_x_mm, m.pupil_decentration_y_mm);
+  const double pupil_edge = m.pupil_radius_mm + decentration;
+  if (!(pupil_edge < m.iris_radius_mm)) {
+    pupil.child("decentration_mm").fail(
+        "[" + format_number(m.pupil_decentration_x_mm) + ", " +
+            format_number(m.pupil_decentration_y_mm) + "]",
+        "moves the pupil's edge to " + format_number(pupil_edge) +
+            " mm from the axis, beyond iris.radius_mm (" + format_number(m.iris_radius_mm) + ")");
+  }
+  // The pupil must sit in the aqueous humour, behind the cornea's inner
+  // surface, or no refracted path reaches it.
+  const auto inner_at_pupil = inner_depth(pupil_edge);
+  if (!inner_at_pupil || !(m.iris_depth_mm > *inner_at_pupil)) {
+    iris.child("depth_mm").fail_number(
+        m.iris_depth_mm, "puts the pupil's edge (" + format_number(pupil_edge) +
+                             " mm from the axis) in front of the cornea's inner surface" +
+                             (inner_at_pupil ? " (" + format_number(*inner_at_pupil) + " mm deep there)"
+                                             : std::string()));
+  }
+  if (!(m.iris_depth_mm < m.rotation_center_depth_mm)) {
+    iris.child("depth_mm").fail_number(
+        m.iris_depth_mm, "must be < rotation_center_depth_mm (" +
+                             format_number(m.rotation_center_depth_mm) + ")");
+  }
+  if (!(m.sclera_radius_mm < m.rotation_center_depth_mm)) {
+    eye.child("sclera_radius_mm")
+        .fail_number(m.sclera_radius_mm,
+                     "must be < rotation_center_depth_mm (" +
+                         format_number(m.rotation_center_depth_mm) +
+                         ") so that the cornea stands out of the sclera");
+  }
+}
+
+EyeModel read_eye_model(Object& e) {
+  const std::string preset = e.get_or<std::string>("model", "keratometric");
+  auto found = eye_model_preset(preset);
+  if (!found) {
+    e.required("model").fail("unknown eye model (valid: keratometric, le_grand, navarro)");
+  }
+  EyeModel m = *found;
+
+  if (auto c = e.optional_object("cornea")) {
+    m.anterior_cornea.radius_mm = c->positive_or("radius_mm", m.anterior_cornea.radius_mm);
+    m.anterior_cornea.asphericity = c->get_or<double>("asphericity", m.anterior_cornea.asphericity);
+    m.limbus_radius_mm = c->positive_or("limbus_radius_mm", m.limbus_radius_mm);
+    c->finish();
+  }
+  if (auto p = e.optional("posterior_cornea")) {
+    if (p->raw().is_string()) {
+      if (p->as_string() != "none") p->fail("must be an object or \"none\"");
+      m.posterior_cornea.reset();
+    } else {
+      if (!p->raw().is_object()) p->fail("must be an object or \"none\"");
+      Object o(*p);
+      PosteriorCornea back = m.posterior_cornea.value_or(PosteriorCornea{});
+      back.surface.radius_mm = o.positive_or("radius_mm", back.surface.radius_mm);
+      back.surface.asphericity = o.get_or<double>("asphericity", back.surface.asphericity);
+      back.thickness_mm = o.positive_or("thickness_mm", back.thickness_mm);
+      if (auto n = o.optional("index")) back.cornea_index = n->refractive_index();
+      o.finish();
+      m.posterior_cornea = back;
+    }
+  }
+  if (auto n = e.optional("aqueous_index")) m.aqueous_index = n->refractive_index();
+  if (auto iris = e.optional_object("iris")) {
+    m.iris_depth_mm = iris->positive_or("depth_mm", m.iris_depth_mm);
+    m.iris_radius_mm = iris->positive_or("radius_mm", m.iris_radius_mm);
+    iris->finish();
+  }
+  if (auto pupil = e.optional_object("pupil")) {
+    m.pupil_radius_mm = pupil->positive_or("radius_mm", m.pupil_radius_mm);
+    if (auto d = pupil->optional("decentration_mm")) {
+      const auto xy = d->as_numbers(2);
+      m.pupil_decentration_x_mm = xy[0];
+      m.pupil_decentration_y_mm = xy[1];
+    }
+    pupil->finish();
+  }
+  m.rotation_center_depth_mm = e.positive_or("rotation_center_depth_mm", m.rotation_center_depth_mm);
+  m.sclera_radius_mm = e.positive_or("sclera_radius_mm", m.sclera_radius_mm);
+  if (auto kappa = e.optional_object("kappa_deg")) {
+    if (auto h = kappa->optional("horizontal")) m.kappa_horizontal_rad = h->within(-45, 45) * kDegree;
+    if (auto v = kappa->optional("vertical")) m.kappa_vertical_rad = v->within(-45, 45) * kDegree;
+    kappa->finish();
+  }
+  check_eye_model(m, e.where());
+  return m;
+}
+
+Eye read_eye(Object& e) {
+  EyeModel model = read_eye_model(e);
+
+  Object position = e.object("position");
+  const bool at_cornea_center = position.one_of("cornea_center_mm", "rotation_center_mm");
+  const Value anchor = position.required(at_cornea_center ? "cornea_center_mm" : "rotation_center_mm");
+  const Point3 anchor_point = anchor.as_point3();
+  position.finish();
+
+  Object orientation = e.object("orientation");
+  std::optional<Eye> eye;
+  if (auto target_value = orientation.optional("gaze_target_mm")) {
+    for (const char* key : {"yaw_deg", "pitch_deg"}) {
+      if (orientation.has(key)) {
+        orientation.required(key).fail("cannot be combined with gaze_target_mm");
+      }
+    }
+    const Point3 target = target_value->as_point3();
+    // Nobody fixates closer than a few centimetres, and a nearer target
+    // could even lie inside the eye whatever way it turns.
+    const double nearest = 2.0 * model.rotation_center_depth_mm;
+    if (!(distance(target, anchor_point) > nearest)) {
+      target_value->fail("is " + format_number(distance(target, anchor_point)) +
+                         " mm from " + anchor.where().path +
+                         ": must be more than 2 x rotation_center_depth_mm = " +
+                         format_number(nearest) + " mm away");
+    }
+    try {
+      eye = at_cornea_center ? Eye::fixating_from_cornea_center(model, anchor_point, target)
+                             : Eye::fixating(model, anchor_point, target);
+    } catch (const std::invalid_argument& error) {
+      target_value->fail(error.what());
+    }
+  } else {
+    const double yaw = orientation.has("yaw_deg") ? orientation.required("yaw_deg").within(-180, 180) : 0.0;
+    const double pitch =
+        orientation.has("pitch_deg") ? orientation.required("pitch_deg").within(-89, 89) : 0.0;
+    const UnitVector3 axis = optical_axis_from_yaw_pitch(yaw * kDegree, pitch * kDegree);
+    eye = at_cornea_center ? Eye::with_cornea_center(model, anchor_point, axis)
+                           : Eye::with_rotation_center(model, anchor_point, axis);
+  }
+  orientation.finish();
+  e.finish();
+  return *eye;
+}
+
+// Why `p` lies inside `eye`, or nullopt. The eye is the sclera sphere
+// united with the corneal cap; the whole sphere of the cornea's apical
+// curvature is included too, to stay clear of surfaces near the limbus.
+std::optional<std::string> inside_eye(const Eye& eye, const Point3& p) {
+  const EyeModel& m = eye.model();
+  if (distance(p, eye.rotation_center()) < m.sclera_radius_mm) return "inside the sclera sphere";
+  if (distance(p, eye.cornea_center()) < m.anterior_cornea.radius_mm) return "inside the cornea";
+  const Point3 q = eye.eye_from_world() * p;
+  const double depth = m.anterior_cornea.radius_mm - q.z;
+  const double r2 = q.x * q.x + q.y * q.y;
+  const Conicoid& s = m.anterior_cornea;
+  if (depth >= 0 && depth <= m.limbus_depth_mm() &&
+      r2 + (1.0 + s.asphericity) * depth * depth - 2.0 * s.radius_mm * depth < 0) {
+    return "inside the cornea";
+  }
+  return std::nullopt;
+}
+
+void check_outside_eyes(const Scene& scene, const Point3& p, const Location& where) {
+  for (std::size_t i = 0; i < scene.eyes.size(); ++i) {
+    if (auto why = inside_eye(scene.eyes[i], p)) {
+      where.fail(format_point(p), "lies " + *why + " of eyes[" + std::to_string(i) + "]");
+    }
+  }
+}
+
+// Runs `read` for the object at `where`, turning a model's own complaint
+// (std::invalid_argument from a constructor) into a SceneError there. The
+// reader's checks should leave nothing for the model to reject; this keeps
+// load_scene's promise of SceneError if one slips through.
+template <class Read>
+auto located(const Location& where, Read read) {
+  try {
+    return read();
+  } catch (const std::invalid_argument& error) {
+    where.fail("", error.what());
+  }
+}
+
+// Objects of a required, non-empty (unless `may_be_empty`) array.
+std::vector<Value> read_list(Object& root, const std::string& key, bool required) {
+  std::optional<Value> list = required ? std::optional<Value>(root.required(key)) : root.optional(key);
+  if (!list) return {};
+  auto items = list->elements();
+  if (required && items.empty()) list->fail("must list at least one entry");
+  return items;
+}
+
+// Duplicate keys: JSON leaves them undefined and nlohmann keeps the last,
+// which would silently drop a value the user wrote.
+json parse_json(const std::string& text, const std::string& source) {
+  std::vector<std::set<std::string>> open_objects;
+  std::optional<std::string> duplicate;
+  const json::parser_callback_t check_duplicates = [&](int, json::parse_event_t event, json& parsed) {
+    if (event == json::parse_event_t::object_start) open_objects.emplace_back();
+    if (event == json::parse_event_t::object_end && !open_objects.empty()) open_objects.pop_back();
+    if (event == json::parse_event_t::key && !open_objects.empty() && !duplicate) {
+      const auto key = parsed.get<std::string>();
+      if (!open_objects.back().insert(key).second) duplicate = key;
+    }
+    return true;
+  };
+  json root;
+  try {
+    root = json::parse(text, check_duplicates, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& error) {
+    // what() reads "[json.exception.parse_error.101] parse error at line L, column C: ...".
+    std::string what = error.what();
+    if (const auto bracket = what.find("] "); bracket != std::string::npos) what = what.substr(bracket + 2);
+    throw SceneError(source + ": invalid JSON (byte " + std::to_string(error.byte) + "): " + what);
+  } catch (const json::exception& error) {
+    // Number overflow (1e999) and the like carry no position; find the line.
+    std::string what = error.what();
+    if (const auto bracket = what.find("] "); bracket != std::string::npos) what = what.substr(bracket + 2);
+    std::string where;
+    if (const auto quote = what.find('\''); quote != std::string::npos) {
+      const auto end = what.find('\'', quote + 1);
+      const auto token = what.substr(quote + 1, end - quote - 1);
+      if (const auto at = text.find(token); !token.empty() && at != std::string::npos) {
+        where = " at line " + std::to_string(1 + std::count(text.begin(), text.begin() + at, '\n'));
+      }
+    }
+    throw SceneError(source + ": invalid JSON" + where + ": " + what);
+  }
+  if (duplicate) throw SceneError(source + ": invalid JSON: duplicate key \"" + *duplicate + "\"");
+  return root;
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::string& source_name) {
+  const json root_json = parse_json(text, source_name);
+  Object root(Value(root_json, Location{&source_name, ""}));
+
+  // The version first: a newer file is best rejected before its keys are.
+  const Value format = root.required("format", "the scene format version, " +
+                                                   std::to_string(kSceneFormatVersion));
+  if (format.as_int() != kSceneFormatVersion) {
+    format.fail("unsupported format version (this program reads " +
+                std::to_string(kSceneFormatVersion) + ")");
+  }
+
+  Scene scene;
+  scene.name = root.get_or<std::string>("name", std::filesystem::path(source_name).stem().string());
+
+  std::set<std::string> names;
+  auto check_unique = [&names](const std::string& name, Object& o) {
+    if (!names.insert(name).second) {
+      const auto v = o.optional("name");
+      (v ? v->where() : o.where())
+          .fail("\"" + name + "\"", "duplicate name (camera and illuminator names must be unique)");
+    }
+  };
+
+  // Eyes first: cameras and lights are then checked against them.
+  for (const Value& v : read_list(root, "eyes", true)) {
+    Object e(v);
+    scene.eyes.push_back(located(e.where(), [&] { return read_eye(e); }));
+  }
+  std::vector<Value> camera_values = read_list(root, "cameras", true);
+  for (std::size_t i = 0; i < camera_values.size(); ++i) {
+    Object c(camera_values[i]);
+    scene.cameras.push_back(located(c.where(), [&] { return read_camera(c, i); }));
+    check_unique(scene.cameras.back().name(), c);
+    check_outside_eyes(scene, scene.cameras.back().center(), c.where().child("position_mm"));
+  }
+  std::vector<Value> light_values = read_list(root, "illuminators", false);
+  for (std::size_t i = 0; i < light_values.size(); ++i) {
+    Object l(light_values[i]);
+    scene.illuminators.push_back(read_illuminator(l, i));
+    check_unique(scene.illuminators.back().name, l);
+    check_outside_eyes(scene, scene.illuminators.back().position, l.where().child("position_mm"));
+  }
+  root.finish();
+  return scene;
+}
+
+Scene load_scene(const std::filesystem::path& file) {
+  std::error_code ignored;
+  if (std::filesystem::is_directory(file, ignored)) {
+    throw SceneError(file.string() + ": cannot read: is a directory");
+  }
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    throw SceneError(file.string() + ": cannot open: " +
+                     (std::filesystem::exists(file) ? "permission denied or not a file"
+                                                    : "no such file"));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw SceneError(file.string() + ": cannot read");
+  return parse_scene(text.str(), file.string());
+}
+
+}  // namespace purkinje

@@ -1,0 +1,415 @@
+#include "purkinje/models/scene_file.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <string>
+
+namespace purkinje {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+const fs::path kSourceDir = PURKINJE_SOURCE_DIR;
+
+// The message of the SceneError that parsing `text` throws; "" if none.
+std::string parse_error(const std::string& text, const std::string& source = "scene.json") {
+  try {
+    parse_scene(text, source);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A minimal valid scene with `eye` as its only eye.
+std::string scene_with_eye(const std::string& eye) {
+  return R"({ "format": 1,
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "eyes": [ )" + eye + R"( ] })";
+}
+
+TEST(SceneFile, ReadsEveryKeyOfAFullScene) {
+  const Scene scene = parse_scene(R"(
+    // Comments are allowed anywhere.
+    { "format": 1, "name": "bench",
+      "cameras": [ { "name": "left", "resolution_px": [1280, 1024],
+                     "focal_length_mm": 25, "pixel_pitch_mm": 0.005,
+                     "distortion": { "k1": -0.1, "k2": 0.02, "p1": 0.001, "p2": -0.002, "k3": 0.003 },
+                     "position_mm": [10, 20, 30], "look_at_mm": [10, 20, 630], "up": [0, -1, 0] } ],
+      "illuminators": [ { "name": "ring", "position_mm": [-50, 5, 0], "radiant_intensity_w_sr": 0.02,
+                          "wavelength_nm": 940, "emitter_diameter_mm": 0.5 } ],
+      "eyes": [ { "model": "le_grand",
+                  "cornea": { "radius_mm": 7.7, "asphericity": -0.2, "limbus_radius_mm": 5.8 },
+                  "posterior_cornea": { "radius_mm": 6.4, "asphericity": -0.1, "thickness_mm": 0.5, "index": 1.38 },
+                  "aqueous_index": 1.335,
+                  "iris": { "depth_mm": 3.5, "radius_mm": 5.4 },
+                  "pupil": { "radius_mm": 1.5, "decentration_mm": [0.2, -0.1] },
+                  "rotation_center_depth_mm": 13, "sclera_radius_mm": 11.5,
+                  "kappa_deg": { "horizontal": 4, "vertical": -2 },
+                  "position": { "cornea_center_mm": [1, 2, 600] },
+                  "orientation": { "yaw_deg": 10, "pitch_deg": -5 } } ] })",
+                                  "bench.json");
+  EXPECT_EQ(scene.name, "bench");
+
+  ASSERT_EQ(scene.cameras.size(), 1u);
+  const Camera& camera = scene.cameras[0];
+  EXPECT_EQ(camera.name(), "left");
+  EXPECT_EQ(camera.intrinsics().width, 1280);
+  EXPECT_EQ(camera.intrinsics().height, 1024);
+  EXPECT_NEAR(camera.intrinsics().fx, 5000.0, 1e-9);  // 25 mm / 0.005 mm
+  EXPECT_NEAR(camera.intrinsics().fy, 5000.0, 1e-9);
+  EXPECT_DOUBLE_EQ(camera.intrinsics().cx, 639.5);  // (1280 - 1) / 2
+  EXPECT_DOUBLE_EQ(camera.intrinsics().cy, 511.5);
+  EXPECT_DOUBLE_EQ(camera.distortion().k1, -0.1);
+  EXPECT_DOUBLE_EQ(camera.distortion().k2, 0.02);
+  EXPECT_DOUBLE_EQ(camera.distortion().p1, 0.001);
+  EXPECT_DOUBLE_EQ(camera.distortion().p2, -0.002);
+  EXPECT_DOUBLE_EQ(camera.distortion().k3, 0.003);
+  EXPECT_NEAR(distance(camera.center(), Point3(10, 20, 30)), 0.0, 1e-12);
+  // Looking along +z with image up = world -y: the identity rotation.
+  const UnitVector3 forward = camera.world_from_camera().rotation().column(2);
+  EXPECT_NEAR(forward.z(), 1.0, 1e-12);
+  EXPECT_NEAR(camera.world_from_camera().rotation().column(1).y(), 1.0, 1e-12);
+
+  ASSERT_EQ(scene.illuminators.size(), 1u);
+  const Illuminator& led = scene.illuminators[0];
+  EXPECT_EQ(led.name, "ring");
+  EXPECT_EQ(led.position, Point3(-50, 5, 0));
+  EXPECT_DOUBLE_EQ(led.radiant_intensity_w_sr, 0.02);
+  EXPECT_DOUBLE_EQ(led.wavelength_nm, 940);
+  EXPECT_DOUBLE_EQ(led.emitter_diameter_mm, 0.5);
+
+  ASSERT_EQ(scene.eyes.size(), 1u);
+  const Eye& eye = scene.eyes[0];
+  const EyeModel& m = eye.model();
+  EXPECT_EQ(m.name, "le_grand");
+  EXPECT_DOUBLE_EQ(m.anterior_cornea.radius_mm, 7.7);
+  EXPECT_DOUBLE_EQ(m.anterior_cornea.asphericity, -0.2);
+  EXPECT_DOUBLE_EQ(m.limbus_radius_mm, 5.8);
+  ASSERT_TRUE(m.posterior_cornea.has_value());
+  EXPECT_DOUBLE_EQ(m.posterior_cornea->surface.radius_mm, 6.4);
+  EXPECT_DOUBLE_EQ(m.posterior_cornea->surface.asphericity, -0.1);
+  EXPECT_DOUBLE_EQ(m.posterior_cornea->thickness_mm, 0.5);
+  EXPECT_DOUBLE_EQ(m.posterior_cornea->cornea_index, 1.38);
+  EXPECT_DOUBLE_EQ(m.aqueous_index, 1.335);
+  EXPECT_DOUBLE_EQ(m.iris_depth_mm, 3.5);
+  EXPECT_DOUBLE_EQ(m.iris_radius_mm, 5.4);
+  EXPECT_DOUBLE_EQ(m.pupil_radius_mm, 1.5);
+  EXPECT_DOUBLE_EQ(m.pupil_decentration_x_mm, 0.2);
+  EXPECT_DOUBLE_EQ(m.pupil_decentration_y_mm, -0.1);
+  EXPECT_DOUBLE_EQ(m.rotation_center_depth_mm, 13);
+  EXPECT_DOUBLE_EQ(m.sclera_radius_mm, 11.5);
+  EXPECT_NEAR(m.kappa_horizontal_rad, 4 * kDegree, 1e-15);
+  EXPECT_NEAR(m.kappa_vertical_rad, -2 * kDegree, 1e-15);
+  EXPECT_NEAR(distance(eye.cornea_center(), Point3(1, 2, 600)), 0.0, 1e-12);
+  // o = (sin yaw cos pitch, -sin pitch, -cos yaw cos pitch), by hand.
+  const double yaw = 10 * kDegree, pitch = -5 * kDegree;
+  EXPECT_NEAR(eye.optical_axis().x(), std::sin(yaw) * std::cos(pitch), 1e-12);
+  EXPECT_NEAR(eye.optical_axis().y(), -std::sin(pitch), 1e-12);
+  EXPECT_NEAR(eye.optical_axis().z(), -std::cos(yaw) * std::cos(pitch), 1e-12);
+}
+
+TEST(SceneFile, FillsDefaultsFromThePresetAndTheFileName) {
+  const Scene scene = parse_scene(
+      scene_with_eye(R"({ "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })"),
+      "dir/my_scene.json");
+  EXPECT_EQ(scene.name, "my_scene");
+  EXPECT_EQ(scene.cameras[0].name(), "cam0");
+  EXPECT_TRUE(scene.cameras[0].distortion().is_zero());
+  EXPECT_TRUE(scene.illuminators.empty());
+  const EyeModel& m = scene.eyes[0].model();
+  const EyeModel preset = keratometric_eye();
+  EXPECT_EQ(m.name, "keratometric");
+  EXPECT_EQ(m.anterior_cornea.radius_mm, preset.anterior_cornea.radius_mm);
+  EXPECT_FALSE(m.posterior_cornea.has_value());
+  EXPECT_EQ(m.pupil_radius_mm, preset.pupil_radius_mm);
+  // No orientation keys: looking along world -z.
+  EXPECT_NEAR(scene.eyes[0].optical_axis().z(), -1.0, 1e-15);
+}
+
+TEST(SceneFile, DefaultIlluminatorValuesMatchTheStruct) {
+  const Scene scene = parse_scene(R"({ "format": 1,
+    "cameras": [ { "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 1] } ],
+    "illuminators": [ { "position_mm": [1, 2, 3] }, { "position_mm": [4, 5, 6] } ],
+    "eyes": [ { "position": { "rotation_center_mm": [0, 0, 600] }, "orientation": {} } ] })",
+                                  "s.json");
+  const Illuminator defaults;
+  ASSERT_EQ(scene.illuminators.size(), 2u);
+  EXPECT_EQ(scene.illuminators[0].name, "led0");
+  EXPECT_EQ(scene.illuminators[1].name, "led1");
+  EXPECT_EQ(scene.illuminators[1].position, Point3(4, 5, 6));
+  EXPECT_EQ(scene.illuminators[0].radiant_intensity_w_sr, defaults.radiant_intensity_w_sr);
+  EXPECT_EQ(scene.illuminators[0].wavelength_nm, defaults.wavelength_nm);
+  EXPECT_EQ(scene.illuminators[0].emitter_diameter_mm, defaults.emitter_diameter_mm);
+  EXPECT_NEAR(distance(scene.eyes[0].rotation_center(), Point3(0, 0, 600)), 0.0, 1e-12);
+}
+
+TEST(SceneFile, ReadsPixelIntrinsicsWithTheImageCentreAsDefault) {
+  const Scene scene = parse_scene(R"({ "format": 1,
+    "cameras": [ { "resolution_px": [101, 51], "intrinsics_px": { "fx": 1000, "fy": 1100 },
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 1] },
+                 { "resolution_px": [100, 50], "intrinsics_px": { "fx": 900, "fy": 950, "cx": 40, "cy": 30 },
+                   "position_mm": [50, 0, 0], "look_at_mm": [50, 0, 1] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ] })",
+                                  "s.json");
+  const Intrinsics& a = scene.cameras[0].intrinsics();
+  EXPECT_EQ(a.fx, 1000);
+  EXPECT_EQ(a.fy, 1100);
+  EXPECT_EQ(a.cx, 50);
+  EXPECT_EQ(a.cy, 25);
+  const Intrinsics& b = scene.cameras[1].intrinsics();
+  EXPECT_EQ(b.cx, 40);
+  EXPECT_EQ(b.cy, 30);
+  EXPECT_EQ(b.width, 100);
+  EXPECT_EQ(b.height, 50);
+}
+
+TEST(SceneFile, RotationVectorGivesTheCameraOrientation) {
+  // Half a turn about +y: the camera at z = 1200 looks back along -z.
+  const Scene scene = parse_scene(R"({ "format": 1,
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 1200], "rotation_vector_deg": [0, 180, 0] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ] })",
+                                  "s.json");
+  const Camera& camera = scene.cameras[0];
+  EXPECT_NEAR(distance(camera.center(), Point3(0, 0, 1200)), 0.0, 1e-12);
+  const UnitVector3 forward = camera.world_from_camera().rotation().column(2);
+  EXPECT_NEAR(forward.z(), -1.0, 1e-12);
+  const UnitVector3 right = camera.world_from_camera().rotation().column(0);
+  EXPECT_NEAR(right.x(), -1.0, 1e-12);
+}
+
+TEST(SceneFile, LookAtPointsTheCameraAtTheTarget) {
+  const Scene scene = parse_scene(R"({ "format": 1,
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 300, 0], "look_at_mm": [0, 0, 400] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ] })",
+                                  "s.json");
+  // (0, -300, 400) / 500, a 3-4-5 triangle.
+  const UnitVector3 forward = scene.cameras[0].world_from_camera().rotation().column(2);
+  EXPECT_NEAR(forward.x(), 0.0, 1e-12);
+  EXPECT_NEAR(forward.y(), -0.6, 1e-12);
+  EXPECT_NEAR(forward.z(), 0.8, 1e-12);
+}
+
+TEST(SceneFile, GazeTargetPutsTheVisualAxisThroughTheTarget) {
+  const Point3 target{100, -150, 0};
+  for (const char* anchor : {"cornea_center_mm", "rotation_center_mm"}) {
+    const Scene scene = parse_scene(
+        scene_with_eye(std::string(R"({ "model": "navarro", "position": { ")") + anchor +
+                       R"(": [0, 0, 600] }, "orientation": { "gaze_target_mm": [100, -150, 0] } })"),
+        "s.json");
+    const Eye& eye = scene.eyes[0];
+    // The visual axis leaves the cornea centre toward the target.
+    EXPECT_LT(angle_between(eye.visual_axis(), target - eye.cornea_center()), 1e-9) << anchor;
+    // Navarro's kappa is not zero: the optical axis misses the target.
+    EXPECT_GT(angle_between(eye.optical_axis(), target - eye.cornea_center()), 4 * kDegree);
+  }
+}
+
+TEST(SceneFile, NoneRemovesThePosteriorCornea) {
+  const Scene scene = parse_scene(
+      scene_with_eye(R"({ "model": "navarro", "posterior_cornea": "none",
+                          "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })"),
+      "s.json");
+  EXPECT_FALSE(scene.eyes[0].model().posterior_cornea.has_value());
+  EXPECT_DOUBLE_EQ(scene.eyes[0].model().anterior_cornea.asphericity, -0.26);  // still Navarro's
+}
+
+TEST(SceneFile, PosteriorCorneaCanBeAddedToAOneSurfaceEye) {
+  const Scene scene = parse_scene(
+      scene_with_eye(R"({ "model": "keratometric", "posterior_cornea": { "thickness_mm": 0.6 },
+                          "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })"),
+      "s.json");
+  ASSERT_TRUE(scene.eyes[0].model().posterior_cornea.has_value());
+  EXPECT_DOUBLE_EQ(scene.eyes[0].model().posterior_cornea->thickness_mm, 0.6);
+  EXPECT_DOUBLE_EQ(scene.eyes[0].model().posterior_cornea->surface.radius_mm,
+                   PosteriorCornea{}.surface.radius_mm);
+}
+
+TEST(SceneFile, ErrorNamesTheFileThePathTheValueAndTheRule) {
+  EXPECT_EQ(parse_error(scene_with_eye(R"({ "cornea": { "radius_mm": -7.8 },
+                   "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })")),
+            "scene.json: eyes[0].cornea.radius_mm = -7.8: must be > 0");
+}
+
+TEST(SceneFile, UnknownKeyListsTheValidOnes) {
+  const std::string message = parse_error(scene_with_eye(R"({ "pupil": { "radius": 2 },
+                   "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })"));
+  EXPECT_NE(message.find("eyes[0].pupil.radius = 2: unknown key"), std::string::npos) << message;
+  EXPECT_NE(message.find("decentration_mm"), std::string::npos) << message;
+  EXPECT_NE(message.find("radius_mm"), std::string::npos) << message;
+}
+
+TEST(SceneFile, MisspeltRequiredKeyIsPointedOut) {
+  const std::string message = parse_error(scene_with_eye(
+      R"({ "position": { "cornea_centre_mm": [0, 0, 600] }, "orientation": {} })"));
+  EXPECT_NE(message.find("eyes[0].position: missing required key"), std::string::npos) << message;
+  EXPECT_NE(message.find("\"cornea_centre_mm\""), std::string::npos) << message;
+}
+
+TEST(SceneFile, SyntaxErrorGivesTheLine) {
+  const std::string message = parse_error("{\n  \"format\": 1,\n  \"cameras\": [,]\n}");
+  EXPECT_NE(message.find("scene.json: invalid JSON"), std::string::npos) << message;
+  EXPECT_NE(message.find("line 3"), std::string::npos) << message;
+}
+
+TEST(SceneFile, MissingFileIsASceneErrorNamingIt) {
+  const fs::path missing = kSourceDir / "tests/data/no_such_scene.json";
+  try {
+    load_scene(missing);
+    FAIL() << "no exception";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneFile, DirectoryIsNotAScene) {
+  EXPECT_THROW(load_scene(kSourceDir / "tests"), SceneError);
+}
+
+TEST(SceneFile, BundledRemoteSceneLoads) {
+  const Scene scene = load_scene(kSourceDir / "assets/scenes/remote.json");
+  EXPECT_EQ(scene.name, "remote");
+  ASSERT_EQ(scene.cameras.size(), 1u);
+  EXPECT_EQ(scene.cameras[0].intrinsics().width, 640);
+  EXPECT_EQ(scene.cameras[0].intrinsics().height, 480);
+  ASSERT_EQ(scene.illuminators.size(), 2u);
+  EXPECT_NEAR(scene.illuminators[0].position.x, -100, 1e-12);
+  EXPECT_NEAR(scene.illuminators[1].position.x, 100, 1e-12);
+  ASSERT_EQ(scene.eyes.size(), 1u);
+  EXPECT_NEAR(distance(scene.eyes[0].cornea_center(), scene.cameras[0].center()), 600, 1e-9);
+}
+
+TEST(SceneFile, BundledHeadsetSceneLoads) {
+  const Scene scene = load_scene(kSourceDir / "assets/scenes/headset.json");
+  EXPECT_EQ(scene.name, "headset");
+  ASSERT_EQ(scene.cameras.size(), 1u);
+  ASSERT_EQ(scene.eyes.size(), 1u);
+  const Eye& eye = scene.eyes[0];
+  // About 35 mm from camera to cornea.
+  EXPECT_NEAR(distance(scene.cameras[0].center(), eye.corneal_apex()), 35, 1.0);
+  // A ring of eight LEDs, 16 mm from the lens axis, 27.2 mm in front of the apex.
+  ASSERT_EQ(scene.illuminators.size(), 8u);
+  for (const Illuminator& led : scene.illuminators) {
+    EXPECT_NEAR(std::hypot(led.position.x, led.position.y), 16, 1e-4) << led.name;
+    EXPECT_NEAR(eye.corneal_apex().z - led.position.z, 27.2, 1e-9) << led.name;
+  }
+}
+
+TEST(SceneFile, ExampleInTheFormatDocumentLoads) {
+  std::ifstream in(kSourceDir / "docs/scene-format.md");
+  ASSERT_TRUE(in) << "docs/scene-format.md";
+  std::string text, line;
+  bool inside = false;
+  while (std::getline(in, line)) {
+    if (line == "```jsonc") {
+      inside = true;
+    } else if (inside && line == "```") {
+      break;
+    } else if (inside) {
+      text += line + "\n";
+    }
+  }
+  ASSERT_FALSE(text.empty());
+  const Scene scene = parse_scene(text, "scene-format.md");
+  EXPECT_EQ(scene.name, "remote");
+  EXPECT_EQ(scene.illuminators.size(), 2u);
+  EXPECT_NEAR(distance(scene.eyes[0].rotation_center(), Point3(30, 0, 610)), 0.0, 1e-9);
+}
+
+// One mistake per file; the expected message for each. A file without an
+// entry here, or an entry without a file, fails MalformedFilesAllHaveExpectations.
+const std::map<std::string, std::string> kMalformed = {
+    {"aqueous_index_below_one", "eyes[0].aqueous_index = 0.9: must be >= 1"},
+    {"camera_inside_eye", "cameras[0].position_mm = [0, 0, 600]: lies inside the sclera sphere of eyes[0]"},
+    {"coordinate_too_far", "illuminators[0].position_mm = [1e+300, 0, 0]: coordinates must be within +-1e+06"},
+    {"duplicate_key", "invalid JSON: duplicate key \"radius_mm\""},
+    {"duplicate_names", "illuminators[1].name = \"led0\": duplicate name"},
+    {"empty_cameras", "cameras = []: must list at least one entry"},
+    {"empty_eyes", "eyes = []: must list at least one entry"},
+    {"empty_file", "invalid JSON (byte"},
+    {"format_missing", "format: missing required key"},
+    {"format_unsupported", "format = 2: unsupported format version"},
+    {"gaze_target_too_close", "eyes[0].orientation.gaze_target_mm = [0, 0, 590]: is 10 mm from"},
+    {"huge_number", "invalid JSON at line 9: number overflow parsing '1e999'"},
+    {"iris_beyond_limbus", "eyes[0].iris.radius_mm = 6.5: must be <= cornea.limbus_radius_mm (5.9)"},
+    {"kappa_unreasonable", "eyes[0].kappa_deg.horizontal = 60: must be between -45 and 45"},
+    {"light_inside_eye", "illuminators[0].position_mm = [0, 0, 610]: lies inside the sclera sphere"},
+    {"limbus_beyond_conicoid", "eyes[0].cornea.limbus_radius_mm = 5.9: must be < radius_mm / sqrt(1 + asphericity)"},
+    {"look_at_equals_position", "cameras[0].look_at_mm = [0, 0, 0]: must differ from position_mm"},
+    {"missing_eye_position", "eyes[0].position: missing required key; found \"positon\""},
+    {"missing_pixel_pitch", "cameras[0].pixel_pitch_mm: missing required key"},
+    {"negative_cornea_radius", "eyes[0].cornea.radius_mm = -7.8: must be > 0"},
+    {"negative_emitter_diameter", "illuminators[0].emitter_diameter_mm = -1: must be >= 0"},
+    {"number_as_string", "cameras[0].focal_length_mm = \"16\": must be a number"},
+    {"pitch_out_of_range", "eyes[0].orientation.pitch_deg = 95: must be between -89 and 89"},
+    {"point_with_two_coordinates", "illuminators[1].position_mm = [100, 0]: must be an array of 3 numbers"},
+    {"posterior_bad_string", "eyes[0].posterior_cornea = \"absent\": must be an object or \"none\""},
+    {"posterior_crosses_anterior", "eyes[0].posterior_cornea.thickness_mm = 0.55: the posterior cornea crosses the anterior one"},
+    {"posterior_index_below_one", "eyes[0].posterior_cornea.index = 0.5: must be >= 1"},
+    {"pupil_decentred_past_iris", "eyes[0].pupil.decentration_mm = [4, 0]: moves the pupil's edge to 6 mm"},
+    {"pupil_larger_than_iris", "eyes[0].pupil.radius_mm = 6: must be < iris.radius_mm (5.5)"},
+    {"resolution_not_integer", "cameras[0].resolution_px[0] = 640.5: must be an integer"},
+    {"resolution_too_big", "cameras[0].resolution_px[0] = 100000: must be <= 65536"},
+    {"syntax_missing_comma", "invalid JSON (byte 213): parse error at line 9, column 22"},
+    {"top_level_array", "(top level) = [1, 2, 3]: must be an object"},
+    {"two_eye_positions", "eyes[0].position: give exactly one of cornea_center_mm and rotation_center_mm"},
+    {"two_intrinsics", "cameras[0]: give exactly one of focal_length_mm and intrinsics_px"},
+    {"unknown_nested_key", "eyes[0].cornea.radius = 7.8: unknown key"},
+    {"unknown_preset", "eyes[0].model = \"gullstrand\": unknown eye model (valid: keratometric, le_grand, navarro)"},
+    {"unknown_top_level_key", "lights = []: unknown key"},
+    {"up_parallel_to_view", "cameras[0].up = [0, 0, 1]: must not be parallel to the viewing direction"},
+    {"yaw_with_gaze_target", "eyes[0].orientation.yaw_deg = 5: cannot be combined with gaze_target_mm"},
+    {"zero_pixel_pitch", "cameras[0].pixel_pitch_mm = 0: must be > 0"},
+};
+
+const fs::path kMalformedDir = kSourceDir / "tests/data/malformed";
+
+TEST(SceneFile, MalformedFilesAllHaveExpectations) {
+  std::set<std::string> files;
+  for (const auto& entry : fs::directory_iterator(kMalformedDir)) {
+    if (entry.path().extension() == ".json") files.insert(entry.path().stem().string());
+  }
+  EXPECT_GE(files.size(), 25u);
+  for (const auto& name : files) EXPECT_TRUE(kMalformed.count(name)) << name << ".json has no expected message";
+  for (const auto& [name, expected] : kMalformed) EXPECT_TRUE(files.count(name)) << name << ".json is missing";
+}
+
+TEST(SceneFile, EachMalformedFileIsRejectedWithItsMessage) {
+  for (const auto& [name, expected] : kMalformed) {
+    const fs::path file = kMalformedDir / (name + ".json");
+    try {
+      load_scene(file);
+      ADD_FAILURE() << name << ": loaded without error";
+    } catch (const SceneError& e) {
+      const std::string message = e.what();
+      // Every message starts with the file it is about.
+      EXPECT_EQ(message.rfind(file.string() + ": ", 0), 0u) << message;
+      EXPECT_NE(message.find(expected), std::string::npos)
+          << name << "\n  message:  " << message << "\n  expected: " << expected;
+    }
+  }
+}
+
+TEST(SceneFile, MalformedFilesSayWhatIsWrongInALeadingComment) {
+  // Each file starts with a comment line saying what is wrong.
+  for (const auto& [name, expected] : kMalformed) {
+    std::ifstream in(kMalformedDir / (name + ".json"));
+    std::string first_line;
+    std::getline(in, first_line);
+    EXPECT_EQ(first_line.rfind("// ", 0), 0u) << name << ".json has no leading comment";
+  }
+}
+
+}  // namespace
+}  // namespace purkinje

@@ -1,0 +1,229 @@
+// Runs the built `purkinje` executable as a user would.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+const fs::path kExecutable = PURKINJE_EXECUTABLE;
+const fs::path kSourceDir = PURKINJE_SOURCE_DIR;
+
+// Single quotes for the shell; a quote inside becomes '\''.
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool mentions_non_finite(const std::string& text) {
+  for (const char* word : {"nan", "NaN", "inf", "Infinity"}) {
+    if (text.find(word) != std::string::npos) return true;
+  }
+  return false;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("purkinje_cli_test_" + std::to_string(::getpid()) + "_" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(root_);
+    output_dir_ = root_ / "out dir";  // a space, to exercise the quoting
+    fs::create_directories(output_dir_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  // Runs purkinje with `arguments` (already quoted); returns its exit code.
+  // Standard output and error land in files outside the output directory.
+  int run(const std::string& arguments) {
+    const std::string command = quoted(kExecutable.string()) + " " + arguments + " >" +
+                                quoted((root_ / "stdout.txt").string()) + " 2>" +
+                                quoted((root_ / "stderr.txt").string());
+    const int status = std::system(command.c_str());
+    if (status == -1 || !WIFEXITED(status)) return -1;
+    return WEXITSTATUS(status);
+  }
+  std::string out() const { return read(root_ / "stdout.txt"); }
+  std::string err() const { return read(root_ / "stderr.txt"); }
+  std::vector<std::string> output_dir_entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(output_dir_)) names.push_back(e.path().filename().string());
+    return names;
+  }
+
+  fs::path root_;
+  fs::path output_dir_;
+};
+
+TEST_F(Cli, RejectsEveryMalformedSceneWithoutWritingAnything) {
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(kSourceDir / "tests/data/malformed")) {
+    if (entry.path().extension() != ".json") continue;
+    ++files;
+    const fs::path output = output_dir_ / "labels.json";
+    const int code = run("truth " + quoted(entry.path().string()) + " -o " + quoted(output.string()));
+    EXPECT_EQ(code, 1) << entry.path() << "\n" << err();
+    // The message names the file; nothing, not even a temporary, is left.
+    EXPECT_NE(err().find(entry.path().string()), std::string::npos) << err();
+    EXPECT_TRUE(output_dir_entries().empty()) << entry.path();
+    EXPECT_TRUE(out().empty()) << entry.path();
+  }
+  EXPECT_GE(files, 25);
+}
+
+TEST_F(Cli, FailedRunLeavesAnExistingOutputUntouched) {
+  const fs::path output = output_dir_ / "labels.json";
+  std::ofstream(output) << "previous labels";
+  const int code = run("truth " + quoted((kSourceDir / "tests/data/malformed/zero_pixel_pitch.json").string()) +
+                       " -o " + quoted(output.string()));
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(read(output), "previous labels");
+  EXPECT_EQ(output_dir_entries().size(), 1u);
+}
+
+class BundledScene : public Cli, public ::testing::WithParamInterface<const char*> {};
+
+TEST_P(BundledScene, HasEveryGlintAndThePupilInTheImage) {
+  const fs::path scene = kSourceDir / "assets/scenes" / GetParam();
+  const fs::path output = output_dir_ / "labels.json";
+  ASSERT_EQ(run("truth " + quoted(scene.string()) + " -o " + quoted(output.string())), 0) << err();
+  EXPECT_EQ(output_dir_entries(), std::vector<std::string>{"labels.json"});
+  const std::string text = read(output);
+  EXPECT_FALSE(mentions_non_finite(text));
+  const json labels = json::parse(text);
+
+  const std::size_t lights = labels["illuminators"].size();
+  EXPECT_GE(lights, 2u);
+  ASSERT_EQ(labels["views"].size(), labels["cameras"].size() * labels["eyes"].size());
+  for (const json& view : labels["views"]) {
+    const json& camera = labels["cameras"][view["camera"].get<std::size_t>()];
+    const double width = camera["width_px"], height = camera["height_px"];
+    auto in_image = [&](const json& feature) {
+      return feature["status"] == "ok" && feature["u_px"].get<double>() >= -0.5 &&
+             feature["u_px"].get<double>() <= width - 0.5 &&
+             feature["v_px"].get<double>() >= -0.5 && feature["v_px"].get<double>() <= height - 0.5;
+    };
+    ASSERT_EQ(view["glints"].size(), lights);
+    for (const json& glint : view["glints"]) {
+      EXPECT_TRUE(in_image(glint)) << glint.dump();
+      EXPECT_EQ(glint["on_cap"], true) << glint.dump();
+    }
+    const json& pupil = view["pupil"];
+    EXPECT_EQ(pupil["border"].size(), 36u);  // the default
+    for (const json& point : pupil["border"]) EXPECT_TRUE(in_image(point)) << point.dump();
+    EXPECT_TRUE(in_image(pupil["refracted_center"])) << pupil["refracted_center"].dump();
+    ASSERT_FALSE(pupil["ellipse"].is_null());
+    // The ellipse's centre lies near the refracted pupil centre (a circle
+    // seen through the cornea is close to, not exactly, an ellipse).
+    EXPECT_NEAR(pupil["ellipse"]["center_u_px"].get<double>(),
+                pupil["refracted_center"]["u_px"].get<double>(), 2.0);
+  }
+}
+
+TEST_P(BundledScene, WritesCsvToStandardOutput) {
+  const fs::path scene = kSourceDir / "assets/scenes" / GetParam();
+  ASSERT_EQ(run("truth " + quoted(scene.string()) + " --format csv --pupil-points 12"), 0) << err();
+  std::istringstream in(out());
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("camera,camera_name,eye,feature,", 0), 0u) << header;
+  int glints = 0, border = 0, rows = 0;
+  for (std::string line; std::getline(in, line); ++rows) {
+    glints += line.find(",glint,") != std::string::npos;
+    border += line.find(",pupil_border,") != std::string::npos;
+  }
+  EXPECT_GE(glints, 2);
+  EXPECT_EQ(border, 12);
+  EXPECT_EQ(rows, glints + border + 5);  // ellipse, 2 pupil centres, cornea and rotation centres
+  EXPECT_FALSE(mentions_non_finite(out()));
+}
+
+TEST_P(BundledScene, PicksCsvFromTheOutputFileExtension) {
+  const fs::path scene = kSourceDir / "assets/scenes" / GetParam();
+  const fs::path output = output_dir_ / "labels.csv";
+  ASSERT_EQ(run("truth " + quoted(scene.string()) + " -o " + quoted(output.string())), 0) << err();
+  EXPECT_EQ(read(output).rfind("camera,camera_name,", 0), 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, BundledScene, ::testing::Values("remote.json", "headset.json"),
+                         [](const auto& info) { return fs::path(info.param).stem().string(); });
+
+TEST_F(Cli, WritesJsonToStandardOutputWithoutOutputOption) {
+  ASSERT_EQ(run("truth " + quoted((kSourceDir / "assets/scenes/remote.json").string())), 0) << err();
+  const json labels = json::parse(out());
+  EXPECT_EQ(labels["scene"], "remote");
+  EXPECT_TRUE(err().empty()) << err();
+}
+
+TEST_F(Cli, HelpExitsZeroForTheProgramAndEverySubcommand) {
+  for (const char* arguments : {"--help", "truth --help"}) {
+    EXPECT_EQ(run(arguments), 0) << arguments;
+    EXPECT_NE(out().find("Usage"), std::string::npos) << arguments << ": " << out();
+    EXPECT_NE(out().find("Exit codes"), std::string::npos) << arguments << ": " << out();
+  }
+}
+
+TEST_F(Cli, VersionExitsZero) {
+  EXPECT_EQ(run("--version"), 0);
+  EXPECT_EQ(out().rfind("purkinje ", 0), 0u) << out();
+}
+
+TEST_F(Cli, UsageErrorsExitTwo) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  EXPECT_EQ(run(""), 2) << "no subcommand";
+  EXPECT_EQ(run("truth"), 2) << "no scene";
+  EXPECT_EQ(run("render " + scene), 2) << "unknown subcommand";
+  EXPECT_EQ(run("truth " + scene + " --format xml"), 2);
+  EXPECT_EQ(run("truth " + scene + " --pupil-points -3"), 2);
+  EXPECT_EQ(run("truth " + scene + " --no-such-option"), 2);
+  EXPECT_TRUE(output_dir_entries().empty());
+}
+
+TEST_F(Cli, MissingSceneFileIsBadInput) {
+  EXPECT_EQ(run("truth " + quoted((root_ / "nowhere.json").string())), 1);
+  EXPECT_NE(err().find("nowhere.json"), std::string::npos) << err();
+}
+
+TEST_F(Cli, UnwritableOutputExitsThreeAndLeavesNothing) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  const fs::path no_dir = output_dir_ / "missing" / "labels.json";
+  EXPECT_EQ(run("truth " + scene + " -o " + quoted(no_dir.string())), 3);
+  EXPECT_NE(err().find(no_dir.string()), std::string::npos) << err();
+  EXPECT_TRUE(output_dir_entries().empty());
+
+  // Standard output that refuses the labels: a full device.
+  if (fs::exists("/dev/full")) {
+    const std::string command = quoted(kExecutable.string()) + " truth " + scene +
+                                " >/dev/full 2>" + quoted((root_ / "stderr.txt").string());
+    const int status = std::system(command.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 3) << err();
+  }
+
+  fs::create_directory(output_dir_ / "taken.json");  // a directory where the file should go
+  EXPECT_EQ(run("truth " + scene + " -o " + quoted((output_dir_ / "taken.json").string())), 3);
+  EXPECT_EQ(output_dir_entries(), std::vector<std::string>{"taken.json"});
+}
+
+}  // namespace

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "purkinje/models/truth.h"
@@ -90,6 +92,7 @@ TEST_F(Reference, HasSixCasesOfTwoLightsAndThirtySixBorderPoints) {
 }
 
 TEST_F(Reference, GlintsMatchWithinMicroPixels) {
+  double max_px = 0, max_mm = 0;
   for (const auto& [id, rows] : *glints_) {
     const Scene scene = scene_from(rows[0], rows);
     const SceneTruth truth = compute_truth(scene);
@@ -106,11 +109,17 @@ TEST_F(Reference, GlintsMatchWithinMicroPixels) {
       EXPECT_NEAR(g.reflection.point.y, r.num("glint_y_mm"), 1e-8);
       EXPECT_NEAR(g.reflection.point.z, r.num("glint_z_mm"), 1e-8);
       EXPECT_NEAR(g.reflection.incidence_rad * 180 / kPi, r.num("glint_incidence_deg"), 1e-9);
+      max_px = std::max({max_px, std::abs(g.pixel.u - r.num("glint_u_px")),
+                         std::abs(g.pixel.v - r.num("glint_v_px"))});
+      max_mm = std::max(max_mm, distance(g.reflection.point, {r.num("glint_x_mm"), r.num("glint_y_mm"),
+                                                              r.num("glint_z_mm")}));
     }
   }
+  std::printf("glints vs reference: max %.2g px, %.2g mm\n", max_px, max_mm);
 }
 
 TEST_F(Reference, RefractedPupilBorderMatchesWithinMicroPixels) {
+  double max_px = 0, max_mm = 0;
   for (const auto& [id, rows] : *glints_) {
     SCOPED_TRACE(id);
     const Scene scene = scene_from(rows[0], rows);
@@ -131,11 +140,18 @@ TEST_F(Reference, RefractedPupilBorderMatchesWithinMicroPixels) {
       EXPECT_NEAR(p.refraction.anterior_point.z, b.num("refr_surface_z_mm"), 1e-8);
       EXPECT_NEAR(p.pixel.u, b.num("u_px"), 1e-6);
       EXPECT_NEAR(p.pixel.v, b.num("v_px"), 1e-6);
+      max_px = std::max({max_px, std::abs(p.pixel.u - b.num("u_px")),
+                         std::abs(p.pixel.v - b.num("v_px"))});
+      max_mm = std::max(max_mm, distance(p.refraction.anterior_point,
+                                         {b.num("refr_surface_x_mm"), b.num("refr_surface_y_mm"),
+                                          b.num("refr_surface_z_mm")}));
     }
   }
+  std::printf("pupil border vs reference: max %.2g px, %.2g mm\n", max_px, max_mm);
 }
 
 TEST_F(Reference, PupilCentresMatch) {
+  double max_centre = 0;
   for (const auto& [id, rows] : *glints_) {
     SCOPED_TRACE(id);
     const CsvRow& r = rows[0];
@@ -152,12 +168,15 @@ TEST_F(Reference, PupilCentresMatch) {
     ASSERT_TRUE(pupil.ellipse_valid);
     EXPECT_NEAR(pupil.ellipse.center.u, r.num("pupil_ellipse_u_px"), 1e-5);
     EXPECT_NEAR(pupil.ellipse.center.v, r.num("pupil_ellipse_v_px"), 1e-5);
+    max_centre = std::max({max_centre, std::abs(pupil.ellipse.center.u - r.num("pupil_ellipse_u_px")),
+                           std::abs(pupil.ellipse.center.v - r.num("pupil_ellipse_v_px"))});
     // Semi-axes in either order (the reference's order follows its angle).
     const double a = pupil.ellipse.semi_axis_1_px, b = pupil.ellipse.semi_axis_2_px;
     const double ra = r.num("pupil_ellipse_semiaxis1_px"), rb = r.num("pupil_ellipse_semiaxis2_px");
     EXPECT_NEAR(std::max(a, b), std::max(ra, rb), 1e-5);
     EXPECT_NEAR(std::min(a, b), std::min(ra, rb), 1e-5);
   }
+  std::printf("pupil ellipse centres vs reference: max %.2g px\n", max_centre);
 }
 
 }  // namespace

@@ -445,8 +445,14 @@ void write_file_atomically(const std::filesystem::path& file, const std::string&
   std::filesystem::path temporary;
   int fd = -1;
   for (int attempt = 0; fd < 0; ++attempt) {
-    temporary = directory / ("." + file.filename().string() + ".tmp." + std::to_string(::getpid()) +
-                             "." + std::to_string(counter++));
+    // Appended piecewise: GCC 12 warns falsely (-Wrestrict) on a chain of operator+.
+    std::string name = ".";
+    name += file.filename().string();
+    name += ".tmp.";
+    name += std::to_string(::getpid());
+    name += '.';
+    name += std::to_string(counter++);
+    temporary = directory / name;
     fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0 && (errno != EEXIST || attempt > 100)) fail("cannot create a temporary file", errno);
   }

@@ -352,7 +352,10 @@ std::string truth_to_json(const Scene& scene, const SceneTruth& truth) {
 
 std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
   std::string out;
-  for (std::size_t i = 0; i < kCsvColumnCount; ++i) out += (i ? "," : "") + std::string(kCsvColumns[i]);
+  for (std::size_t i = 0; i < kCsvColumnCount; ++i) {
+    if (i) out += ',';
+    out += kCsvColumns[i];
+  }
   out += "\n";
 
   for (const EyeInCameraTruth& v : truth.views) {

@@ -38,8 +38,11 @@ std::string format_number(double v) {
 }
 
 // A value as the user wrote it, short enough for one line of a message.
-std::string format_value(const json& v) {
+std::string format_value(const json& v, int depth = 0) {
   std::string text;
+  // Bounded recursion: a scene nested thousands of levels deep must get a
+  // message, not a stack overflow.
+  if (depth >= 3 && (v.is_array() || v.is_object())) return v.is_array() ? "[...]" : "{...}";
   switch (v.type()) {
     case json::value_t::number_float: text = format_number(v.get<double>()); break;
     case json::value_t::array: {
@@ -50,7 +53,7 @@ std::string format_value(const json& v) {
           text += "...";
           break;
         }
-        text += format_value(v[i]);
+        text += format_value(v[i], depth + 1);
       }
       text += "]";
       break;
@@ -180,6 +183,13 @@ class Value {
   double non_negative() const {
     const double v = as_double();
     if (!(v >= 0)) fail("must be >= 0");
+    return v;
+  }
+  // Conicoids with Q < -1 are hyperboloids, open toward the eye's inside;
+  // the solver's inside/outside test assumes a closed surface.
+  double asphericity() const {
+    const double v = as_double();
+    if (!(v >= -1.0)) fail("must be >= -1 (hyperboloidal corneas are not modelled)");
     return v;
   }
   double refractive_index() const {
@@ -515,7 +525,7 @@ EyeModel read_eye_model(Object& e) {
 
   if (auto c = e.optional_object("cornea")) {
     m.anterior_cornea.radius_mm = c->positive_or("radius_mm", m.anterior_cornea.radius_mm);
-    m.anterior_cornea.asphericity = c->get_or<double>("asphericity", m.anterior_cornea.asphericity);
+    if (auto q = c->optional("asphericity")) m.anterior_cornea.asphericity = q->asphericity();
     m.limbus_radius_mm = c->positive_or("limbus_radius_mm", m.limbus_radius_mm);
     c->finish();
   }
@@ -528,7 +538,7 @@ EyeModel read_eye_model(Object& e) {
       Object o(*p);
       PosteriorCornea back = m.posterior_cornea.value_or(PosteriorCornea{});
       back.surface.radius_mm = o.positive_or("radius_mm", back.surface.radius_mm);
-      back.surface.asphericity = o.get_or<double>("asphericity", back.surface.asphericity);
+      if (auto q = o.optional("asphericity")) back.surface.asphericity = q->asphericity();
       back.thickness_mm = o.positive_or("thickness_mm", back.thickness_mm);
       if (auto n = o.optional("index")) back.cornea_index = n->refractive_index();
       o.finish();

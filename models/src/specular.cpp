@@ -204,6 +204,8 @@ bool sphere_refraction(double R, double n_in, const Vector3& inner, const Vector
   if (path.derivative(0.0) < 0.0) {
     // Leave the horizon itself out: there the exit is grazing.
     const double hi = theta_max * (1.0 - 1e-15);
+    // A nearly tangent straight line can put lo past hi by rounding.
+    lo = std::min(lo, hi);
     if (path.derivative(hi) <= 0.0) {
       tir = true;
       return false;

@@ -330,6 +330,7 @@ TEST(SceneFile, ExampleInTheFormatDocumentLoads) {
 // One mistake per file; the expected message for each. A file without an
 // entry here, or an entry without a file, fails MalformedFilesAllHaveExpectations.
 const std::map<std::string, std::string> kMalformed = {
+    {"hyperboloid_cornea", "eyes[0].cornea.asphericity = -1.5: must be >= -1 (hyperboloidal corneas are not modelled)"},
     {"aqueous_index_below_one", "eyes[0].aqueous_index = 0.9: must be >= 1"},
     {"camera_inside_eye", "cameras[0].position_mm = [0, 0, 600]: lies inside the sclera sphere of eyes[0]"},
     {"coordinate_too_far", "illuminators[0].position_mm = [1e+300, 0, 0]: coordinates must be within +-1e+06"},
@@ -408,6 +409,24 @@ TEST(SceneFile, MalformedFilesSayWhatIsWrongInALeadingComment) {
     std::string first_line;
     std::getline(in, first_line);
     EXPECT_EQ(first_line.rfind("// ", 0), 0u) << name << ".json has no leading comment";
+  }
+}
+
+}  // namespace
+}  // namespace purkinje
+
+namespace purkinje {
+namespace {
+
+TEST(SceneFile, DeeplyNestedValueGivesAMessageNotACrash) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  try {
+    parse_scene("{\"format\": " + deep + "}", "deep.json");
+    FAIL() << "a nested array is not a format version";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("deep.json: format = [[[[...]]]]: must be a number"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -136,12 +136,10 @@ void check_refraction(Sweep& s, int kind, int count, SweepStats& stats) {
   for (int i = 0; i < count; ++i) {
     const Eye e = s.eye(kind);
     const EyeModel& m = e.model();
-    // A point of the pupil's disc or border.
+    // A point of the pupil's border (half the time) or of its disc.
     const double inside = s.uniform(0.0, 1.0) < 0.5 ? 1.0 : s.uniform(0.0, 1.0);
-    const Point3 inner = Point3::origin() +
-                         (e.pupil_border_point(s.uniform(0, 2 * kPi)) - Point3::origin()) * 1.0;
-    const Point3 target =
-        e.pupil_center() + (inner - e.pupil_center()) * inside;
+    const Point3 border = e.pupil_border_point(s.uniform(0, 2 * kPi));
+    const Point3 target = e.pupil_center() + (border - e.pupil_center()) * inside;
     const Refraction r = solve_refraction(e, target, Point3::origin());
     ++stats.configurations;
     ++stats.statuses[to_string(r.status)];

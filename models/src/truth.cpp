@@ -7,9 +7,14 @@ namespace {
 
 constexpr double kTwoPi = 6.28318530717958647692;
 
-// A path status after the camera has looked at its end point.
-PathStatus with_projection(PathStatus path, const Projection& p) {
-  if (path != PathStatus::ok) return path;
+// The camera's view of a path's surface point: its pixel (left as it is
+// when the path has no point or the point is behind the camera) and the
+// path's status, which for an ok path becomes the projection's verdict.
+PathStatus image_of(PathStatus path, const Point3& point, const Camera& camera, Pixel& pixel) {
+  if (path != PathStatus::ok && path != PathStatus::off_cornea) return path;
+  const Projection p = camera.project(point);
+  if (p.status != ProjectionStatus::behind_camera) pixel = p.pixel;
+  if (path == PathStatus::off_cornea) return path;
   switch (p.status) {
     case ProjectionStatus::ok: return PathStatus::ok;
     case ProjectionStatus::behind_camera: return PathStatus::behind_camera;
@@ -18,23 +23,12 @@ PathStatus with_projection(PathStatus path, const Projection& p) {
   return PathStatus::no_solution;
 }
 
-bool has_pixel(PathStatus path, const Projection& p) {
-  return (path == PathStatus::ok || path == PathStatus::off_cornea) &&
-         p.status != ProjectionStatus::behind_camera;
-}
-
 }  // namespace
 
 RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
   RefractedImage out;
   out.path = solve_refraction(eye, inner, camera.center());
-  if (out.path.status != PathStatus::ok && out.path.status != PathStatus::off_cornea) {
-    out.status = out.path.status;
-    return out;
-  }
-  const Projection p = camera.project(out.path.anterior_point);
-  if (has_pixel(out.path.status, p)) out.pixel = p.pixel;
-  out.status = with_projection(out.path.status, p);
+  out.status = image_of(out.path.status, out.path.anterior_point, camera, out.pixel);
   return out;
 }
 
@@ -62,12 +56,7 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         GlintTruth g;
         g.illuminator = l;
         g.reflection = solve_reflection(eye, scene.illuminators[l].position, camera.center());
-        g.status = g.reflection.status;
-        if (g.status == PathStatus::ok || g.status == PathStatus::off_cornea) {
-          const Projection p = camera.project(g.reflection.point);
-          if (has_pixel(g.status, p)) g.pixel = p.pixel;
-          g.status = with_projection(g.status, p);
-        }
+        g.status = image_of(g.reflection.status, g.reflection.point, camera, g.pixel);
         view.glints.push_back(g);
       }
       std::vector<Pixel> ok_pixels;

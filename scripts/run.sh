@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job: build purkinje (Release) and write ground-truth labels
-# (JSON and CSV) for the bundled scenes into out/<scene>/.
+# The main job: build purkinje (Release), render the bundled scenes
+# (sensor image PNG, EXR with radiance and AOVs, labels JSON) and write
+# their ground-truth labels as JSON and CSV, into out/<scene>/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"  # cache hits across checkouts
@@ -11,10 +12,12 @@ cmake --build build/release --target purkinje
 
 for scene in remote headset; do
   mkdir -p "out/$scene"
+  build/release/tools/purkinje render "assets/scenes/$scene.json" -o "out/$scene"
   build/release/tools/purkinje truth "assets/scenes/$scene.json" -o "out/$scene/labels.json"
   build/release/tools/purkinje truth "assets/scenes/$scene.json" -o "out/$scene/labels.csv"
 done
 
 echo
-echo "Labels written:"
-ls -l out/remote/labels.json out/remote/labels.csv out/headset/labels.json out/headset/labels.csv
+echo "Images and labels written (open the .png files in any viewer; the .exr"
+echo "files hold float radiance and AOVs; docs/rendering.md explains them):"
+ls -l out/remote out/headset

@@ -1,14 +1,22 @@
 // The purkinje command line: argument parsing and exit codes only; the
 // work is done by the libraries. Documented in docs/cli.md.
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cstdint>
+#include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <iostream>
+#include <mutex>
 #include <string>
 
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/truth.h"
+#include "purkinje/renderer/image_io.h"
+#include "purkinje/renderer/render.h"
 
 namespace {
 
@@ -70,6 +78,98 @@ int run_truth(const TruthRequest& request) {
   return kOk;
 }
 
+struct RenderRequest {
+  std::string scene_file;
+  std::string output_dir;
+  std::string camera;  // empty: every camera
+  std::string mode = "fast";
+  int samples = purkinje::renderer::RenderOptions{}.samples_per_pixel;
+  std::uint64_t seed = 0;
+  bool no_noise = false;
+  bool glint_masks = false;
+  int threads = 0;
+};
+
+// File names keep to a portable set of characters.
+std::string file_stem(const std::string& scene, const std::string& camera) {
+  std::string stem = scene.empty() ? "scene" : scene;
+  stem += "_" + camera;
+  for (char& c : stem) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '-' || c == '_' || c == '.';
+    if (!ok) c = '_';
+  }
+  return stem;
+}
+
+int run_render(const RenderRequest& request) {
+  namespace r = purkinje::renderer;
+  purkinje::Scene scene;
+  std::vector<int> cameras;
+  r::RenderOptions options;
+  try {
+    scene = purkinje::load_scene(request.scene_file);
+    for (int i = 0; i < static_cast<int>(scene.cameras.size()); ++i) {
+      if (request.camera.empty() || scene.cameras[i].name() == request.camera) cameras.push_back(i);
+    }
+    if (cameras.empty()) {
+      throw std::invalid_argument(request.scene_file + ": no camera named '" + request.camera + "'");
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje render: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
+  options.samples_per_pixel = request.samples;
+  options.seed = request.seed;
+  options.noise = !request.no_noise;
+  options.per_light_glint_masks = request.glint_masks;
+  options.threads = request.threads;
+
+  std::error_code ec;
+  std::filesystem::create_directories(request.output_dir, ec);
+  if (ec) {
+    std::cerr << "purkinje render: error: " << request.output_dir << ": cannot create the output folder: "
+              << ec.message() << "\n";
+    return kOutputError;
+  }
+
+  const bool terminal = isatty(STDERR_FILENO) != 0;
+  for (int camera : cameras) {
+    const std::string& name = scene.cameras[camera].name();
+    std::mutex progress_mutex;
+    int shown = -1;
+    if (terminal) {
+      options.progress = [&](double fraction) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        const int percent = static_cast<int>(fraction * 100);
+        if (percent == shown) return;
+        shown = percent;
+        std::fprintf(stderr, "\rrendering %s: %3d%%", name.c_str(), percent);
+      };
+    }
+    r::RenderResult result;
+    try {
+      result = r::render(scene, camera, options);
+    } catch (const std::exception& error) {
+      if (terminal) std::fprintf(stderr, "\n");
+      std::cerr << "purkinje render: error: " << request.scene_file << ": " << error.what() << "\n";
+      return kBadInput;
+    }
+    if (terminal) std::fprintf(stderr, "\r\033[K");
+    try {
+      const r::RenderFiles files =
+          r::write_render(request.output_dir, file_stem(scene.name, name), scene, result, options);
+      std::cout << "wrote " << files.image.string() << ", " << files.exr.filename().string() << ", "
+                << files.labels.filename().string() << "\n";
+    } catch (const std::exception& error) {
+      std::cerr << "purkinje render: error: " << error.what() << "\n";
+      return kOutputError;
+    }
+  }
+  return kOk;
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"purkinje: physically based simulator of eye-tracker cameras"};
   app.set_version_flag("--version", std::string("purkinje ") + PURKINJE_VERSION);
@@ -94,6 +194,32 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
 
+  RenderRequest render_request;
+  CLI::App* render = app.add_subcommand(
+      "render", "Render near-infrared camera images of a scene, with AOVs and labels");
+  render->footer(std::string("For each camera, writes DIR/<scene>_<camera>.png (sensor image),\n"
+                             ".exr (radiance, linear electrons, AOVs) and .json (labels; see\n"
+                             "docs/labels.md and docs/rendering.md).\n\n") +
+                 kExitCodes);
+  render->add_option("SCENE", render_request.scene_file, "Scene file (JSON, see docs/scene-format.md)")
+      ->required();
+  render->add_option("-o,--output", render_request.output_dir, "Output folder (created if missing)")
+      ->required();
+  render->add_option("--camera", render_request.camera, "Render only the camera of this name");
+  render->add_option("--mode", render_request.mode, "fast (default) or reference (brute force)")
+      ->check(CLI::IsMember({"fast", "reference"}))
+      ->capture_default_str();
+  render->add_option("--samples", render_request.samples, "Camera rays per pixel")
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
+  render->add_option("--seed", render_request.seed, "Seed of jitter and sensor noise")
+      ->capture_default_str();
+  render->add_flag("--no-noise", render_request.no_noise, "Leave out shot and read noise");
+  render->add_flag("--glint-masks", render_request.glint_masks, "Add one glint mask per illuminator to the EXR");
+  render->add_option("--threads", render_request.threads, "Worker threads (0: all); output does not depend on it")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -101,6 +227,7 @@ int run(int argc, char** argv) {
     return app.exit(error) == 0 ? kOk : kUsageError;
   }
   if (*truth) return run_truth(truth_request);
+  if (*render) return run_render(render_request);
   return kUsageError;  // unreachable: a subcommand is required
 }
 

@@ -76,12 +76,13 @@ const char* to_string(ProjectionStatus s) {
 }
 
 Camera::Camera(std::string name, const Intrinsics& intrinsics, const Distortion& distortion,
-               const Pose& world_from_camera)
+               const Pose& world_from_camera, const Sensor& sensor)
     : name_(std::move(name)),
       intrinsics_(intrinsics),
       distortion_(distortion),
       world_from_camera_(world_from_camera),
-      camera_from_world_(world_from_camera.inverse()) {
+      camera_from_world_(world_from_camera.inverse()),
+      sensor_(sensor) {
   const std::string prefix = "camera '" + name_ + "': intrinsics.";
   require_positive(prefix + "fx", intrinsics.fx);
   require_positive(prefix + "fy", intrinsics.fy);

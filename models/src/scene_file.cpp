@@ -151,6 +151,33 @@ class Value {
     if (!j_->is_string()) fail("must be a string");
     return j_->get<std::string>();
   }
+  bool as_bool() const {
+    if (!j_->is_boolean()) fail("must be true or false");
+    return j_->get<bool>();
+  }
+  // A non-negative integer below 2^53: larger ones would not survive a
+  // reader that keeps JSON numbers as doubles (Python's json does not, but
+  // JavaScript and many others do), so a seed could silently change.
+  std::uint64_t as_exact_count() const {
+    constexpr std::uint64_t kLimit = std::uint64_t{1} << 53;
+    std::uint64_t v = 0;
+    if (j_->is_number_unsigned()) {
+      v = j_->get<std::uint64_t>();
+    } else if (j_->is_number_integer()) {
+      if (j_->get<std::int64_t>() < 0) fail("must be >= 0");
+      v = static_cast<std::uint64_t>(j_->get<std::int64_t>());
+    } else {
+      const double d = as_double();
+      if (d != std::floor(d)) fail("must be an integer");
+      if (d < 0) fail("must be >= 0");
+      if (d >= static_cast<double>(kLimit)) v = kLimit;
+      else v = static_cast<std::uint64_t>(d);
+    }
+    if (v >= kLimit) {
+      fail("must be < 2^53 = 9007199254740992 (larger integers are not exact in many JSON readers)");
+    }
+    return v;
+  }
   std::vector<Value> elements() const {
     if (!j_->is_array()) fail("must be an array");
     std::vector<Value> out;
@@ -213,6 +240,12 @@ class Value {
     }
     return v;
   }
+  // A direction given as [x, y, z]: any non-zero length.
+  Vector3 direction() const {
+    const Vector3 v = as_vector3();
+    if (!(v.norm() > 0)) fail("must not be the zero vector");
+    return v;
+  }
 
  private:
   const json* j_;
@@ -271,6 +304,10 @@ class Object {
     if (auto v = optional(key)) return v->non_negative();
     return fallback;
   }
+  double within_or(const std::string& key, double low, double high, double fallback) {
+    if (auto v = optional(key)) return v->within(low, high);
+    return fallback;
+  }
 
   // Exactly one of `a` and `b`; returns true for `a`.
   bool one_of(const std::string& a, const std::string& b) {
@@ -315,6 +352,7 @@ class Object {
     if constexpr (std::is_same_v<T, double>) return v.as_double();
     else if constexpr (std::is_same_v<T, int>) return v.as_int();
     else if constexpr (std::is_same_v<T, std::string>) return v.as_string();
+    else if constexpr (std::is_same_v<T, bool>) return v.as_bool();
     else if constexpr (std::is_same_v<T, Point3>) return v.as_point3();
     else if constexpr (std::is_same_v<T, Vector3>) return v.as_vector3();
     else static_assert(sizeof(T) == 0, "no conversion from JSON to this type");
@@ -325,6 +363,57 @@ class Object {
 };
 
 // ---------------------------------------------------------------- cameras
+
+// The sensor block; `sensor` arrives with the pixel pitch already set when
+// the camera was given by focal length (`focal_length_mm` set), which the
+// block may then not repeat.
+Sensor read_sensor(Object& s, Sensor sensor, std::optional<double> focal_length_mm,
+                   const Intrinsics& intrinsics) {
+  const bool pitch_from_camera = focal_length_mm.has_value();
+  if (auto pitch = s.optional("pixel_pitch_mm")) {
+    if (pitch_from_camera) {
+      pitch->fail("allowed only with intrinsics_px (with focal_length_mm, the camera's own "
+                  "pixel_pitch_mm gives it)");
+    }
+    sensor.pixel_pitch_mm = pitch->positive();
+  }
+  sensor.f_number = s.positive_or("f_number", sensor.f_number);
+  sensor.exposure_s = s.positive_or("exposure_s", sensor.exposure_s);
+  if (auto qe = s.optional("quantum_efficiency")) {
+    sensor.quantum_efficiency = qe->as_double();
+    if (!(sensor.quantum_efficiency > 0 && sensor.quantum_efficiency <= 1)) {
+      qe->fail("must be > 0 and <= 1");
+    }
+  }
+  sensor.full_well_e = s.positive_or("full_well_e", sensor.full_well_e);
+  sensor.read_noise_e = s.non_negative_or("read_noise_e", sensor.read_noise_e);
+  sensor.gain = s.positive_or("gain", sensor.gain);
+  if (auto bits = s.optional("bits")) {
+    sensor.bits = bits->as_int();
+    if (sensor.bits != 8 && sensor.bits != 10 && sensor.bits != 12 && sensor.bits != 16) {
+      bits->fail("must be one of 8, 10, 12, 16");
+    }
+  }
+  // Wider than 20 px is no longer a lens but a fog, and the blur kernels
+  // would grow to the size of the image.
+  sensor.psf_sigma_px = s.within_or("psf_sigma_px", 0, 20, sensor.psf_sigma_px);
+  if (auto focus = s.optional("focus_distance_mm")) {
+    // A thin lens images nothing nearer than its focal length: the blur
+    // circle would have no finite size.
+    // The message quotes the focal length as written; the test also holds
+    // for the renderer's fx * pitch, which may round a hair above it.
+    const double renderer_focal_mm = intrinsics.fx * sensor.pixel_pitch_mm;
+    const double focal_mm = focal_length_mm.value_or(renderer_focal_mm);
+    const double distance_mm = focus->as_double();
+    if (!(distance_mm > focal_mm && distance_mm > renderer_focal_mm)) {
+      focus->fail("must be > the focal length (" + format_number(focal_mm) + " mm)");
+    }
+    sensor.focus_distance_mm = distance_mm;
+  }
+  sensor.noise = s.get_or<bool>("noise", sensor.noise);
+  s.finish();
+  return sensor;
+}
 
 Camera read_camera(Object& c, std::size_t index) {
   const std::string name = c.get_or<std::string>("name", "cam" + std::to_string(index));
@@ -344,13 +433,18 @@ Camera read_camera(Object& c, std::size_t index) {
   const int width = size[0], height = size[1];
 
   Intrinsics intrinsics;
+  Sensor sensor;
+  std::optional<double> focal_length_mm;
   if (c.one_of("focal_length_mm", "intrinsics_px")) {
     const double focal = c.required("focal_length_mm").positive();
+    focal_length_mm = focal;
     const double pitch = c.required("pixel_pitch_mm", "needed with focal_length_mm").positive();
     intrinsics = Intrinsics::from_focal_length(focal, pitch, width, height);
+    sensor.pixel_pitch_mm = pitch;
   } else {
     if (c.has("pixel_pitch_mm")) {
-      c.required("pixel_pitch_mm").fail("not used with intrinsics_px (give focal_length_mm instead)");
+      c.required("pixel_pitch_mm")
+          .fail("not used with intrinsics_px (give focal_length_mm, or sensor.pixel_pitch_mm)");
     }
     Object k = c.object("intrinsics_px");
     intrinsics.width = width;
@@ -370,6 +464,10 @@ Camera read_camera(Object& c, std::size_t index) {
     distortion.p2 = d->get_or<double>("p2", 0.0);
     distortion.k3 = d->get_or<double>("k3", 0.0);
     d->finish();
+  }
+
+  if (auto s = c.optional_object("sensor")) {
+    sensor = read_sensor(*s, sensor, focal_length_mm, intrinsics);
   }
 
   const Point3 position = c.get<Point3>("position_mm");
@@ -396,7 +494,7 @@ Camera read_camera(Object& c, std::size_t index) {
     world_from_camera = Pose(Rotation::from_rotation_vector(degrees * kDegree), position.from_origin());
   }
   c.finish();
-  return Camera(name, intrinsics, distortion, world_from_camera);
+  return Camera(name, intrinsics, distortion, world_from_camera, sensor);
 }
 
 // ----------------------------------------------------------- illuminators
@@ -571,6 +669,84 @@ EyeModel read_eye_model(Object& e) {
   return m;
 }
 
+// Lid heights along the head's up direction: the opening must close
+// between the margins. The key blamed is one the user wrote, where possible.
+void check_lid_heights(Object& o, const Eyelids& lids) {
+  const Location& where = o.where();
+  if (!(lids.lower_margin_mm < lids.closing_line_mm)) {
+    if (o.has("lower_margin_mm")) {
+      where.child("lower_margin_mm")
+          .fail_number(lids.lower_margin_mm,
+                       "must be < closing_line_mm (" + format_number(lids.closing_line_mm) + ")");
+    }
+    where.child("closing_line_mm")
+        .fail_number(lids.closing_line_mm,
+                     "must be > lower_margin_mm (" + format_number(lids.lower_margin_mm) + ")");
+  }
+  if (!(lids.closing_line_mm < lids.upper_margin_mm)) {
+    if (o.has("upper_margin_mm")) {
+      where.child("upper_margin_mm")
+          .fail_number(lids.upper_margin_mm,
+                       "must be > closing_line_mm (" + format_number(lids.closing_line_mm) + ")");
+    }
+    where.child("closing_line_mm")
+        .fail_number(lids.closing_line_mm,
+                     "must be < upper_margin_mm (" + format_number(lids.upper_margin_mm) + ")");
+  }
+}
+
+// Albedos, iris texture, head frame and eyelids; the preset has none of
+// these, so the defaults are EyeAppearance's.
+EyeAppearance read_appearance(Object& e) {
+  EyeAppearance a;
+  if (auto o = e.optional_object("appearance")) {
+    a.iris_albedo = o->within_or("iris_albedo", 0, 1, a.iris_albedo);
+    a.iris_texture_contrast = o->within_or("iris_texture_contrast", 0, 1, a.iris_texture_contrast);
+    if (auto seed = o->optional("iris_seed")) a.iris_seed = seed->as_exact_count();
+    a.sclera_albedo = o->within_or("sclera_albedo", 0, 1, a.sclera_albedo);
+    a.skin_albedo = o->within_or("skin_albedo", 0, 1, a.skin_albedo);
+    a.fundus_reflectance = o->within_or("fundus_reflectance", 0, 1, a.fundus_reflectance);
+    o->finish();
+  }
+
+  if (auto lids_value = e.optional("eyelids")) {
+    Object o(*lids_value);
+    Eyelids lids;
+    lids.opening = o.within_or("opening", 0, 1, lids.opening);
+    lids.upper_margin_mm = o.get_or<double>("upper_margin_mm", lids.upper_margin_mm);
+    lids.lower_margin_mm = o.get_or<double>("lower_margin_mm", lids.lower_margin_mm);
+    lids.closing_line_mm = o.get_or<double>("closing_line_mm", lids.closing_line_mm);
+    lids.half_width_mm = o.positive_or("half_width_mm", lids.half_width_mm);
+    check_lid_heights(o, lids);
+    o.finish();
+    a.eyelids = lids;
+  }
+
+  if (auto head_value = e.optional("head")) {
+    // The head frame places nothing but the lids and skin.
+    if (!a.eyelids) head_value->fail("only used with eyelids (add \"eyelids\": {})");
+    Object head(*head_value);
+    Vector3 forward = a.head_forward;
+    Vector3 up = a.head_up;
+    const auto forward_value = head.optional("forward");
+    if (forward_value) forward = forward_value->direction();
+    const auto up_value = head.optional("up");
+    if (up_value) up = up_value->direction();
+    const Vector3 f = forward / forward.norm();
+    if (cross(f, up / up.norm()).norm() < 1e-6) {
+      if (up_value) up_value->fail("must not be parallel to head.forward");
+      // The defaults are perpendicular: only a given forward meets the default up.
+      forward_value.value().fail("is parallel to the default head.up [0, -1, 0]: give \"up\"");
+    }
+    head.finish();
+    // As a camera's up: only the part across the forward direction counts,
+    // so the renderer gets an orthonormal pair.
+    a.head_forward = UnitVector3::normalize(f);
+    a.head_up = UnitVector3::normalize(up - dot(up, f) * f);
+  }
+  return a;
+}
+
 Eye read_eye(Object& e) {
   EyeModel model = read_eye_model(e);
 
@@ -613,6 +789,7 @@ Eye read_eye(Object& e) {
                            : Eye::with_rotation_center(model, anchor_point, axis);
   }
   orientation.finish();
+  eye->set_appearance(read_appearance(e));
   e.finish();
   return *eye;
 }

@@ -236,6 +236,286 @@ TEST(SceneFile, PosteriorCorneaCanBeAddedToAOneSurfaceEye) {
                    PosteriorCornea{}.surface.radius_mm);
 }
 
+// ------------------------------------------------------ sensor
+
+// A minimal valid scene whose one camera is `camera`.
+std::string scene_with_camera(const std::string& camera) {
+  return R"({ "format": 1, "cameras": [ )" + camera + R"( ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ] })";
+}
+
+// A camera by focal length (16 mm, 6 um pixels) with the given sensor block.
+std::string camera_with_sensor(const std::string& sensor) {
+  return scene_with_camera(R"({ "resolution_px": [640, 480], "focal_length_mm": 16,
+      "pixel_pitch_mm": 0.006, "sensor": )" + sensor + R"(,
+      "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] })");
+}
+
+TEST(SceneFile, ReadsEverySensorKey) {
+  const Scene scene = parse_scene(camera_with_sensor(R"({
+      "f_number": 1.4, "exposure_s": 0.0025, "quantum_efficiency": 0.45, "full_well_e": 20000,
+      "read_noise_e": 2.5, "gain": 4, "bits": 12, "psf_sigma_px": 1.25,
+      "focus_distance_mm": 550, "noise": false })"),
+                                  "s.json");
+  const Sensor& sensor = scene.cameras[0].sensor();
+  EXPECT_DOUBLE_EQ(sensor.pixel_pitch_mm, 0.006);  // the camera's own
+  EXPECT_DOUBLE_EQ(sensor.f_number, 1.4);
+  EXPECT_DOUBLE_EQ(sensor.exposure_s, 0.0025);
+  EXPECT_DOUBLE_EQ(sensor.quantum_efficiency, 0.45);
+  EXPECT_DOUBLE_EQ(sensor.full_well_e, 20000);
+  EXPECT_DOUBLE_EQ(sensor.read_noise_e, 2.5);
+  EXPECT_DOUBLE_EQ(sensor.gain, 4);
+  EXPECT_EQ(sensor.bits, 12);
+  EXPECT_DOUBLE_EQ(sensor.psf_sigma_px, 1.25);
+  ASSERT_TRUE(sensor.focus_distance_mm.has_value());
+  EXPECT_DOUBLE_EQ(*sensor.focus_distance_mm, 550);
+  EXPECT_FALSE(sensor.noise);
+  EXPECT_NEAR(scene.cameras[0].focal_length_mm(), 16, 1e-12);
+}
+
+TEST(SceneFile, WithoutASensorBlockTheCameraHasTheDocumentedDefaults) {
+  // The values of the table in docs/scene-format.md, not Sensor{}'s: a
+  // changed default must be documented.
+  const Scene scene = parse_scene(scene_with_camera(R"({ "resolution_px": [640, 480],
+      "focal_length_mm": 12, "pixel_pitch_mm": 0.003,
+      "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] })"),
+                                  "s.json");
+  const Sensor& sensor = scene.cameras[0].sensor();
+  EXPECT_DOUBLE_EQ(sensor.pixel_pitch_mm, 0.003);  // the camera's pitch is the sensor's
+  EXPECT_NEAR(scene.cameras[0].focal_length_mm(), 12, 1e-12);
+  EXPECT_EQ(sensor.f_number, 2.8);
+  EXPECT_EQ(sensor.exposure_s, 0.004);
+  EXPECT_EQ(sensor.quantum_efficiency, 0.3);
+  EXPECT_EQ(sensor.full_well_e, 10000);
+  EXPECT_EQ(sensor.read_noise_e, 4);
+  EXPECT_EQ(sensor.gain, 1);
+  EXPECT_EQ(sensor.bits, 8);
+  EXPECT_EQ(sensor.psf_sigma_px, 0.5);
+  EXPECT_FALSE(sensor.focus_distance_mm.has_value());
+  EXPECT_TRUE(sensor.noise);
+}
+
+TEST(SceneFile, SensorPitchWithPixelIntrinsicsGivesTheFocalLengthInMm) {
+  const Scene scene = parse_scene(scene_with_camera(R"({ "resolution_px": [640, 480],
+      "intrinsics_px": { "fx": 2000, "fy": 2000 }, "sensor": { "pixel_pitch_mm": 0.004 },
+      "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] })"),
+                                  "s.json");
+  EXPECT_DOUBLE_EQ(scene.cameras[0].sensor().pixel_pitch_mm, 0.004);
+  EXPECT_NEAR(scene.cameras[0].focal_length_mm(), 8, 1e-12);  // 2000 px x 4 um
+  EXPECT_EQ(scene.cameras[0].intrinsics().fx, 2000);           // untouched by the pitch
+}
+
+TEST(SceneFile, SensorRangesAreInclusiveWhereDocumented) {
+  for (const char* ok : {R"({ "quantum_efficiency": 1 })", R"({ "read_noise_e": 0 })",
+                         R"({ "psf_sigma_px": 0 })", R"({ "psf_sigma_px": 20 })",
+                         R"({ "bits": 8 })", R"({ "bits": 10 })", R"({ "bits": 16 })",
+                         R"({ "focus_distance_mm": 16.001 })", R"({})"}) {
+    EXPECT_EQ(parse_error(camera_with_sensor(ok)), "") << ok;
+  }
+  const std::map<std::string, std::string> bad = {
+      {R"({ "quantum_efficiency": 0 })", "sensor.quantum_efficiency = 0: must be > 0 and <= 1"},
+      {R"({ "exposure_s": 0 })", "sensor.exposure_s = 0: must be > 0"},
+      {R"({ "full_well_e": -5 })", "sensor.full_well_e = -5: must be > 0"},
+      {R"({ "gain": 0 })", "sensor.gain = 0: must be > 0"},
+      {R"({ "bits": 8.5 })", "sensor.bits = 8.5: must be an integer"},
+      {R"({ "bits": 0 })", "sensor.bits = 0: must be one of 8, 10, 12, 16"},
+      {R"({ "psf_sigma_px": -0.1 })", "sensor.psf_sigma_px = -0.1: must be between 0 and 20"},
+      // Exactly at the focal length the thin lens images at infinity.
+      {R"({ "focus_distance_mm": 16 })", "sensor.focus_distance_mm = 16: must be > the focal length (16 mm)"},
+      {R"({ "focus_distance_mm": -600 })", "sensor.focus_distance_mm = -600: must be > the focal length"},
+      {R"({ "noise": 1 })", "sensor.noise = 1: must be true or false"},
+      {R"([])", "cameras[0].sensor = []: must be an object"},
+  };
+  for (const auto& [sensor, expected] : bad) {
+    const std::string message = parse_error(camera_with_sensor(sensor));
+    EXPECT_NE(message.find(expected), std::string::npos) << sensor << "\n  message: " << message;
+  }
+}
+
+TEST(SceneFile, FocusIsCheckedAgainstTheFocalLengthFromPixelIntrinsics) {
+  // fx = 2500 px at 4 um: 10 mm. 9.9 mm is inside it, 10.1 mm outside.
+  const auto camera = [](const std::string& focus) {
+    return scene_with_camera(R"({ "resolution_px": [640, 480], "intrinsics_px": { "fx": 2500, "fy": 2500 },
+        "sensor": { "pixel_pitch_mm": 0.004, "focus_distance_mm": )" + focus + R"( },
+        "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] })");
+  };
+  EXPECT_EQ(parse_error(camera("10.1")), "");
+  EXPECT_EQ(parse_error(camera("9.9")),
+            "scene.json: cameras[0].sensor.focus_distance_mm = 9.9: must be > the focal length (10 mm)");
+}
+
+TEST(SceneFile, PixelPitchBesidePixelIntrinsicsPointsToTheSensorKey) {
+  const std::string message = parse_error(scene_with_camera(R"({ "resolution_px": [640, 480],
+      "intrinsics_px": { "fx": 2000, "fy": 2000 }, "pixel_pitch_mm": 0.004,
+      "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] })"));
+  EXPECT_EQ(message, "scene.json: cameras[0].pixel_pitch_mm = 0.004: not used with intrinsics_px "
+                     "(give focal_length_mm, or sensor.pixel_pitch_mm)");
+}
+
+// --------------------------------------------------- appearance and lids
+
+// A minimal eye at 600 mm with `extra` keys appended.
+std::string eye_with(const std::string& extra) {
+  return scene_with_eye(R"({ "position": { "rotation_center_mm": [0, 0, 600] }, "orientation": {}, )" +
+                        extra + " }");
+}
+
+TEST(SceneFile, ReadsEveryAppearanceKey) {
+  const Scene scene = parse_scene(eye_with(R"("appearance": {
+      "iris_albedo": 0.15, "iris_texture_contrast": 0.8, "iris_seed": 9007199254740991,
+      "sclera_albedo": 0.7, "skin_albedo": 0.35, "fundus_reflectance": 0.6 })"),
+                                  "s.json");
+  const EyeAppearance& a = scene.eyes[0].appearance();
+  EXPECT_DOUBLE_EQ(a.iris_albedo, 0.15);
+  EXPECT_DOUBLE_EQ(a.iris_texture_contrast, 0.8);
+  EXPECT_EQ(a.iris_seed, 9007199254740991u);  // 2^53 - 1, the largest allowed, exactly
+  EXPECT_DOUBLE_EQ(a.sclera_albedo, 0.7);
+  EXPECT_DOUBLE_EQ(a.skin_albedo, 0.35);
+  EXPECT_DOUBLE_EQ(a.fundus_reflectance, 0.6);
+  EXPECT_FALSE(a.eyelids.has_value());  // appearance alone adds no lids
+}
+
+TEST(SceneFile, WithoutAppearanceKeysTheEyeHasTheDocumentedDefaults) {
+  const Scene scene = parse_scene(eye_with(R"("appearance": {})"), "s.json");
+  const EyeAppearance& a = scene.eyes[0].appearance();
+  EXPECT_EQ(a.iris_albedo, 0.25);
+  EXPECT_EQ(a.iris_texture_contrast, 0.5);
+  EXPECT_EQ(a.iris_seed, 1u);
+  EXPECT_EQ(a.sclera_albedo, 0.55);
+  EXPECT_EQ(a.skin_albedo, 0.45);
+  EXPECT_EQ(a.fundus_reflectance, 0.05);
+  EXPECT_EQ(a.head_forward.vector(), Vector3(0, 0, -1));
+  EXPECT_EQ(a.head_up.vector(), Vector3(0, -1, 0));
+  EXPECT_FALSE(a.eyelids.has_value());
+}
+
+TEST(SceneFile, AppearanceBoundsAndSeedSpellings) {
+  // Bounds are inclusive; a whole number written as 42.0 or 4.2e1 is still an integer.
+  EXPECT_EQ(parse_error(eye_with(R"("appearance": { "iris_albedo": 0, "sclera_albedo": 1,
+      "iris_texture_contrast": 0, "fundus_reflectance": 1, "skin_albedo": 1, "iris_seed": 0 })")),
+            "");
+  for (const char* seed : {"42.0", "4.2e1"}) {
+    const Scene scene =
+        parse_scene(eye_with(std::string(R"("appearance": { "iris_seed": )") + seed + " }"), "s.json");
+    EXPECT_EQ(scene.eyes[0].appearance().iris_seed, 42u) << seed;
+  }
+  const std::map<std::string, std::string> bad = {
+      {R"({ "iris_seed": 1.5 })", "appearance.iris_seed = 1.5: must be an integer"},
+      {R"({ "iris_seed": -0.5 })", "appearance.iris_seed = -0.5: must be an integer"},
+      {R"({ "iris_seed": -1 })", "appearance.iris_seed = -1: must be >= 0"},
+      {R"({ "iris_seed": 1e16 })", "appearance.iris_seed = 1e+16: must be < 2^53"},
+      {R"({ "iris_seed": 18446744073709551615 })", "must be < 2^53"},
+      {R"({ "iris_seed": "7" })", "appearance.iris_seed = \"7\": must be a number"},
+      {R"({ "sclera_albedo": -0.01 })", "appearance.sclera_albedo = -0.01: must be between 0 and 1"},
+      {R"({ "fundus_reflectance": 1.01 })", "appearance.fundus_reflectance = 1.01: must be between 0 and 1"},
+      {R"({ "iris_albedo_nm": 0.2 })", "appearance.iris_albedo_nm = 0.2: unknown key"},
+  };
+  for (const auto& [appearance, expected] : bad) {
+    const std::string message = parse_error(eye_with(R"("appearance": )" + appearance));
+    EXPECT_NE(message.find(expected), std::string::npos) << appearance << "\n  message: " << message;
+  }
+}
+
+TEST(SceneFile, EmptyEyelidsObjectTurnsOnLidsWithTheDocumentedDefaults) {
+  const Scene scene = parse_scene(eye_with(R"("eyelids": {})"), "s.json");
+  const EyeAppearance& a = scene.eyes[0].appearance();
+  ASSERT_TRUE(a.eyelids.has_value());
+  EXPECT_EQ(a.eyelids->opening, 1.0);
+  EXPECT_EQ(a.eyelids->upper_margin_mm, 4.5);
+  EXPECT_EQ(a.eyelids->lower_margin_mm, -5.5);
+  EXPECT_EQ(a.eyelids->closing_line_mm, -1.0);
+  EXPECT_EQ(a.eyelids->half_width_mm, 15.0);
+  // The other appearance keys keep their defaults.
+  EXPECT_EQ(a.skin_albedo, 0.45);
+}
+
+TEST(SceneFile, ReadsEveryEyelidKey) {
+  const Scene scene = parse_scene(eye_with(R"("eyelids": { "opening": 0.25, "upper_margin_mm": 6,
+      "lower_margin_mm": -4, "closing_line_mm": 0.5, "half_width_mm": 12.5 })"),
+                                  "s.json");
+  const Eyelids& lids = *scene.eyes[0].appearance().eyelids;
+  EXPECT_DOUBLE_EQ(lids.opening, 0.25);
+  EXPECT_DOUBLE_EQ(lids.upper_margin_mm, 6);
+  EXPECT_DOUBLE_EQ(lids.lower_margin_mm, -4);
+  EXPECT_DOUBLE_EQ(lids.closing_line_mm, 0.5);
+  EXPECT_DOUBLE_EQ(lids.half_width_mm, 12.5);
+}
+
+TEST(SceneFile, EyelidHeightsMustCloseBetweenTheMargins) {
+  // Fully closed (opening 0) is a valid eye.
+  EXPECT_EQ(parse_error(eye_with(R"("eyelids": { "opening": 0 })")), "");
+  // The key blamed is the one written; with only the closing line written,
+  // the closing line.
+  const std::map<std::string, std::string> bad = {
+      {R"({ "upper_margin_mm": -1 })", "eyes[0].eyelids.upper_margin_mm = -1: must be > closing_line_mm (-1)"},
+      {R"({ "closing_line_mm": 5 })", "eyes[0].eyelids.closing_line_mm = 5: must be < upper_margin_mm (4.5)"},
+      {R"({ "closing_line_mm": -6 })", "eyes[0].eyelids.closing_line_mm = -6: must be > lower_margin_mm (-5.5)"},
+      {R"({ "lower_margin_mm": -1 })", "eyes[0].eyelids.lower_margin_mm = -1: must be < closing_line_mm (-1)"},
+      {R"({ "opening": -0.1 })", "eyes[0].eyelids.opening = -0.1: must be between 0 and 1"},
+      {R"({ "half_width_mm": -3 })", "eyes[0].eyelids.half_width_mm = -3: must be > 0"},
+      {R"({ "upper_margin_mm": "4.5" })", "eyes[0].eyelids.upper_margin_mm = \"4.5\": must be a number"},
+      {R"({ "open": 1 })", "eyes[0].eyelids.open = 1: unknown key"},
+  };
+  for (const auto& [lids, expected] : bad) {
+    EXPECT_EQ(parse_error(eye_with(R"("eyelids": )" + lids)).find("scene.json: " + expected), 0u)
+        << lids << "\n  message: " << parse_error(eye_with(R"("eyelids": )" + lids));
+  }
+}
+
+TEST(SceneFile, HeadFrameIsNormalizedWithUpMadePerpendicular) {
+  // forward [0, 0, -2] -> (0, 0, -1); up [0, -1, -1] has 1 along forward,
+  // which is removed: (0, -1, -1) - 1 x (0, 0, -1) = (0, -1, 0).
+  {
+    const Scene scene = parse_scene(
+        eye_with(R"("eyelids": {}, "head": { "forward": [0, 0, -2], "up": [0, -1, -1] })"), "s.json");
+    const EyeAppearance& a = scene.eyes[0].appearance();
+    EXPECT_NEAR(a.head_forward.x(), 0, 1e-15);
+    EXPECT_NEAR(a.head_forward.y(), 0, 1e-15);
+    EXPECT_NEAR(a.head_forward.z(), -1, 1e-15);
+    EXPECT_NEAR(a.head_up.x(), 0, 1e-15);
+    EXPECT_NEAR(a.head_up.y(), -1, 1e-15);
+    EXPECT_NEAR(a.head_up.z(), 0, 1e-15);
+  }
+  // A head turned 45 deg toward +x keeps the default up, already across it.
+  {
+    const Scene scene =
+        parse_scene(eye_with(R"("eyelids": {}, "head": { "forward": [1, 0, -1] })"), "s.json");
+    const EyeAppearance& a = scene.eyes[0].appearance();
+    EXPECT_NEAR(a.head_forward.x(), std::sqrt(0.5), 1e-15);
+    EXPECT_NEAR(a.head_forward.z(), -std::sqrt(0.5), 1e-15);
+    EXPECT_NEAR(a.head_up.y(), -1, 1e-15);
+  }
+  // A head tilted back: forward up and out, up given as world up.
+  {
+    const Scene scene = parse_scene(
+        eye_with(R"("eyelids": {}, "head": { "forward": [0, -3, -4], "up": [0, -1, 0] })"), "s.json");
+    const EyeAppearance& a = scene.eyes[0].appearance();
+    // f = (0, -0.6, -0.8); up - (up.f) f = (0, -1, 0) - 0.6 (0, -0.6, -0.8) = (0, -0.64, 0.48),
+    // of length 0.8: (0, -0.8, 0.6).
+    EXPECT_NEAR(a.head_up.y(), -0.8, 1e-15);
+    EXPECT_NEAR(a.head_up.z(), 0.6, 1e-15);
+    EXPECT_NEAR(dot(a.head_up, a.head_forward), 0, 1e-15);
+  }
+}
+
+TEST(SceneFile, DegenerateHeadFramesAreRejected) {
+  const std::map<std::string, std::string> bad = {
+      // Forward along the default up, with no up given: say which up it meets.
+      {R"({ "forward": [0, 2, 0] })",
+       "eyes[0].head.forward = [0, 2, 0]: is parallel to the default head.up [0, -1, 0]: give \"up\""},
+      {R"({ "up": [0, 0, 1] })", "eyes[0].head.up = [0, 0, 1]: must not be parallel to head.forward"},
+      // Parallel to within a micro-radian counts as parallel.
+      {R"({ "forward": [0, 0, -1], "up": [1e-9, 0, 1] })", "eyes[0].head.up = [1e-09, 0, 1]: must not be parallel"},
+      {R"({ "up": [0, 0, 0] })", "eyes[0].head.up = [0, 0, 0]: must not be the zero vector"},
+      {R"({ "forward": [0, 0] })", "eyes[0].head.forward = [0, 0]: must be an array of 3 numbers"},
+      {R"({ "right": [1, 0, 0] })", "eyes[0].head.right = [1, 0, 0]: unknown key"},
+  };
+  for (const auto& [head, expected] : bad) {
+    const std::string message = parse_error(eye_with(R"("eyelids": {}, "head": )" + head));
+    EXPECT_EQ(message.find("scene.json: " + expected), 0u) << head << "\n  message: " << message;
+  }
+}
+
 TEST(SceneFile, ErrorNamesTheFileThePathTheValueAndTheRule) {
   EXPECT_EQ(parse_error(scene_with_eye(R"({ "cornea": { "radius_mm": -7.8 },
                    "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })")),
@@ -279,6 +559,18 @@ TEST(SceneFile, DirectoryIsNotAScene) {
 
 TEST(SceneFile, BundledRemoteSceneLoads) {
   const Scene scene = load_scene(kSourceDir / "assets/scenes/remote.json");
+  // The sensor block spells out the defaults.
+  const Sensor& sensor = scene.cameras.at(0).sensor();
+  EXPECT_DOUBLE_EQ(sensor.pixel_pitch_mm, 0.006);
+  EXPECT_EQ(sensor.f_number, 2.8);
+  EXPECT_EQ(sensor.exposure_s, 0.004);
+  EXPECT_EQ(sensor.bits, 8);
+  EXPECT_TRUE(sensor.noise);
+  EXPECT_FALSE(sensor.focus_distance_mm.has_value());
+  EXPECT_NEAR(scene.cameras.at(0).focal_length_mm(), 16, 1e-12);
+  const EyeAppearance& look = scene.eyes.at(0).appearance();
+  EXPECT_EQ(look.iris_albedo, 0.2);
+  EXPECT_TRUE(look.eyelids.has_value());
   EXPECT_EQ(scene.name, "remote");
   ASSERT_EQ(scene.cameras.size(), 1u);
   EXPECT_EQ(scene.cameras[0].intrinsics().width, 640);
@@ -296,6 +588,10 @@ TEST(SceneFile, BundledHeadsetSceneLoads) {
   ASSERT_EQ(scene.cameras.size(), 1u);
   ASSERT_EQ(scene.eyes.size(), 1u);
   const Eye& eye = scene.eyes[0];
+  EXPECT_TRUE(eye.appearance().eyelids.has_value());
+  EXPECT_DOUBLE_EQ(scene.cameras[0].sensor().pixel_pitch_mm, 0.003);
+  EXPECT_NEAR(scene.cameras[0].focal_length_mm(), 1.3, 1e-12);
+  EXPECT_EQ(scene.cameras[0].sensor().bits, 8);
   // About 35 mm from camera to cornea.
   EXPECT_NEAR(distance(scene.cameras[0].center(), eye.corneal_apex()), 35, 1.0);
   // A ring of eight LEDs, 16 mm from the lens axis, 27.2 mm in front of the apex.
@@ -325,6 +621,11 @@ TEST(SceneFile, ExampleInTheFormatDocumentLoads) {
   EXPECT_EQ(scene.name, "remote");
   EXPECT_EQ(scene.illuminators.size(), 2u);
   EXPECT_NEAR(distance(scene.eyes[0].rotation_center(), Point3(30, 0, 610)), 0.0, 1e-9);
+  EXPECT_EQ(scene.cameras[0].sensor().bits, 10);
+  EXPECT_EQ(scene.cameras[0].sensor().focus_distance_mm, 600.0);
+  EXPECT_EQ(scene.eyes[0].appearance().iris_seed, 7u);
+  ASSERT_TRUE(scene.eyes[0].appearance().eyelids.has_value());
+  EXPECT_EQ(scene.eyes[0].appearance().eyelids->opening, 0.8);
 }
 
 // One mistake per file; the expected message for each. A file without an
@@ -332,6 +633,9 @@ TEST(SceneFile, ExampleInTheFormatDocumentLoads) {
 const std::map<std::string, std::string> kMalformed = {
     {"hyperboloid_cornea", "eyes[0].cornea.asphericity = -1.5: must be >= -1 (hyperboloidal corneas are not modelled)"},
     {"aqueous_index_below_one", "eyes[0].aqueous_index = 0.9: must be >= 1"},
+    {"appearance_albedo_above_one", "eyes[0].appearance.iris_albedo = 1.5: must be between 0 and 1"},
+    {"appearance_seed_negative", "eyes[0].appearance.iris_seed = -3: must be >= 0"},
+    {"appearance_seed_too_large", "eyes[0].appearance.iris_seed = 9007199254740992: must be < 2^53"},
     {"camera_inside_eye", "cameras[0].position_mm = [0, 0, 600]: lies inside the sclera sphere of eyes[0]"},
     {"coordinate_too_far", "illuminators[0].position_mm = [1e+300, 0, 0]: coordinates must be within +-1e+06"},
     {"duplicate_key", "invalid JSON: duplicate key \"radius_mm\""},
@@ -339,9 +643,16 @@ const std::map<std::string, std::string> kMalformed = {
     {"empty_cameras", "cameras = []: must list at least one entry"},
     {"empty_eyes", "eyes = []: must list at least one entry"},
     {"empty_file", "invalid JSON (byte"},
+    {"eyelids_margins_crossed", "eyes[0].eyelids.lower_margin_mm = 0: must be < closing_line_mm (-1)"},
+    {"eyelids_not_an_object", "eyes[0].eyelids = true: must be an object"},
+    {"eyelids_opening_out_of_range", "eyes[0].eyelids.opening = 1.5: must be between 0 and 1"},
+    {"eyelids_zero_half_width", "eyes[0].eyelids.half_width_mm = 0: must be > 0"},
     {"format_missing", "format: missing required key"},
     {"format_unsupported", "format = 2: unsupported format version"},
     {"gaze_target_too_close", "eyes[0].orientation.gaze_target_mm = [0, 0, 590]: is 10 mm from"},
+    {"head_up_parallel_to_forward", "eyes[0].head.up = [0, 0, 2]: must not be parallel to head.forward"},
+    {"head_without_eyelids", "eyes[0].head = {...}: only used with eyelids"},
+    {"head_zero_forward", "eyes[0].head.forward = [0, 0, 0]: must not be the zero vector"},
     {"huge_number", "invalid JSON at line 9: number overflow parsing '1e999'"},
     {"iris_beyond_limbus", "eyes[0].iris.radius_mm = 6.5: must be <= cornea.limbus_radius_mm (5.9)"},
     {"kappa_unreasonable", "eyes[0].kappa_deg.horizontal = 60: must be between -45 and 45"},
@@ -362,6 +673,21 @@ const std::map<std::string, std::string> kMalformed = {
     {"pupil_larger_than_iris", "eyes[0].pupil.radius_mm = 6: must be < iris.radius_mm (5.5)"},
     {"resolution_not_integer", "cameras[0].resolution_px[0] = 640.5: must be an integer"},
     {"resolution_too_big", "cameras[0].resolution_px[0] = 100000: must be <= 65536"},
+    {"sensor_bits_unsupported", "cameras[0].sensor.bits = 14: must be one of 8, 10, 12, 16"},
+    {"sensor_f_number_zero", "cameras[0].sensor.f_number = 0: must be > 0"},
+    {"sensor_focus_inside_focal_length",
+     "cameras[0].sensor.focus_distance_mm = 10: must be > the focal length (16 mm)"},
+    {"sensor_noise_not_boolean", "cameras[0].sensor.noise = \"yes\": must be true or false"},
+    {"sensor_pixel_pitch_with_focal_length",
+     "cameras[0].sensor.pixel_pitch_mm = 0.006: allowed only with intrinsics_px"},
+    {"sensor_psf_too_wide", "cameras[0].sensor.psf_sigma_px = 25: must be between 0 and 20"},
+    {"sensor_quantum_efficiency_above_one",
+     "cameras[0].sensor.quantum_efficiency = 1.2: must be > 0 and <= 1"},
+    {"sensor_read_noise_negative", "cameras[0].sensor.read_noise_e = -1: must be >= 0"},
+    {"sensor_unknown_key",
+     "cameras[0].sensor.exposure_ms = 4: unknown key (valid keys here: bits, exposure_s, f_number, "
+     "focus_distance_mm, full_well_e, gain, noise, pixel_pitch_mm, psf_sigma_px, quantum_efficiency, "
+     "read_noise_e)"},
     {"syntax_missing_comma", "invalid JSON (byte 213): parse error at line 9, column 22"},
     {"top_level_array", "(top level) = [1, 2, 3]: must be an object"},
     {"two_eye_positions", "eyes[0].position: give exactly one of cornea_center_mm and rotation_center_mm"},

@@ -8,6 +8,7 @@
 
 #include "purkinje/models/geometry.h"
 #include "purkinje/models/rotation.h"
+#include "purkinje/models/sensor.h"
 
 namespace purkinje {
 
@@ -43,13 +44,16 @@ struct Projection {
 class Camera {
  public:
   Camera(std::string name, const Intrinsics& intrinsics, const Distortion& distortion,
-         const Pose& world_from_camera);
+         const Pose& world_from_camera, const Sensor& sensor = {});
 
   const std::string& name() const { return name_; }
   const Intrinsics& intrinsics() const { return intrinsics_; }
   const Distortion& distortion() const { return distortion_; }
   const Pose& world_from_camera() const { return world_from_camera_; }
   const Pose& camera_from_world() const { return camera_from_world_; }
+  const Sensor& sensor() const { return sensor_; }
+  // Focal length in mm, from fx and the sensor's pixel pitch.
+  double focal_length_mm() const { return intrinsics_.fx * sensor_.pixel_pitch_mm; }
   Point3 center() const;  // optical centre in the world
 
   // World point to pixel, distortion included. Points in the image plane
@@ -70,6 +74,7 @@ class Camera {
   Distortion distortion_;
   Pose world_from_camera_;
   Pose camera_from_world_;
+  Sensor sensor_;
 };
 
 // A world pose for a camera at `position` looking at `target`, with the

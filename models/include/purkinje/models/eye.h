@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 
+#include "purkinje/models/appearance.h"
 #include "purkinje/models/geometry.h"
 #include "purkinje/models/rotation.h"
 
@@ -87,6 +88,9 @@ class Eye {
                                          const Point3& target);
 
   const EyeModel& model() const { return model_; }
+  // Albedos, iris texture, eyelids: what the renderer needs beyond geometry.
+  const EyeAppearance& appearance() const { return appearance_; }
+  void set_appearance(const EyeAppearance& appearance) { appearance_ = appearance; }
   const Pose& world_from_eye() const { return world_from_eye_; }
   const Pose& eye_from_world() const { return eye_from_world_; }
 
@@ -106,6 +110,7 @@ class Eye {
   EyeModel model_;
   Pose world_from_eye_;
   Pose eye_from_world_;
+  EyeAppearance appearance_;
 };
 
 // The eye-frame axes for an optical axis o: x = normalize(e_x - (e_x.o) o),

@@ -1,0 +1,91 @@
+#pragma once
+// Radiometry of light paths through and off the cornea, from the
+// specular-path solver: Fresnel factors, glint power, and the irradiance
+// that reaches the iris plane through the cornea (the caustic), cached on
+// a grid so that shading an iris pixel costs a lookup.
+
+#include <functional>
+#include <vector>
+
+#include "purkinje/models/camera.h"
+#include "purkinje/models/eye.h"
+#include "purkinje/models/illuminator.h"
+#include "purkinje/models/specular.h"
+
+namespace purkinje::renderer {
+
+// Unpolarized Fresnel reflectance for light in a medium of index n1
+// meeting one of index n2 at incidence angle acos(cos_incidence); 1 beyond
+// the critical angle.
+double fresnel_reflectance(double cos_incidence, double n1, double n2);
+
+// Index just inside the anterior cornea: cornea_index for two-surface
+// eyes, aqueous_index otherwise.
+double anterior_inner_index(const EyeModel& model);
+
+// The glint of `light` in `eye` as `camera` sees it.
+struct GlintRadiometry {
+  PathStatus status = PathStatus::no_solution;  // the reflection's status
+  double fresnel = 0;        // reflectance at the glint point
+  double power_w = 0;        // optical power entering the camera's aperture
+  // Covariance (u-u, u-v, v-v) in px^2 of the LED's own image: its emitting
+  // disc, seen in the convex mirror and imaged by the camera (0 for a point LED).
+  double source_cov_px2[3] = {0, 0, 0};
+};
+// From the solver's reflection toward the camera centre. The spreading of
+// the reflected beam is measured from the solver itself: reflections
+// toward points around the aperture give the solid angle, seen from the
+// LED, of the rays that enter it, so it holds for any cornea shape.
+GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
+                                 const Reflection& reflection);
+
+// Irradiance (W/m^2) on the iris plane of one eye from one point light,
+// through the cornea: I * T * dOmega/dA, with T the Fresnel transmittance
+// of every corneal interface crossed and dOmega/dA the solid angle at the
+// light per unit iris-plane area. Computed exactly by the solver at the
+// nodes of a square grid over the iris plane (covering the iris and the
+// pupil) and interpolated between them (see GridNode).
+class IrisIrradianceCache {
+ public:
+  // `visible(a, b)`: whether the segment from the light to a point on the
+  // anterior cornea is unobstructed (eyelids, skin); may be empty (always
+  // visible). `resolution`: nodes per side (>= 2).
+  using Visibility = std::function<bool(const Point3& light, const Point3& cornea_point)>;
+  IrisIrradianceCache(const Eye& eye, const Point3& light_position, double radiant_intensity_w_sr,
+                      int resolution, const Visibility& visible = {});
+
+  // At a world point on (or within rounding of) the iris plane; 0 outside the grid.
+  double irradiance_w_m2(const Point3& iris_plane_point) const;
+  // Half the side of the grid's square, in mm (eye frame, centred on the optical axis).
+  double half_size_mm() const { return half_size_mm_; }
+  int resolution() const { return resolution_; }
+
+ private:
+  Pose eye_from_world_;
+  double iris_plane_z_mm_ = 0;  // eye frame
+  double half_size_mm_ = 0;
+  int resolution_ = 0;
+  // What is interpolated, as E = spread * c * (1 - Fresnel reflectance at
+  // the anterior cornea for incidence cosine c): c falls linearly to 0 at
+  // the light's horizon on the cornea and the spread stays smooth there,
+  // where E itself has no simple form. The lit margin (mm) is how far
+  // inside the limbus the path crosses the cornea, capped by how far inside
+  // the cornea the iris point lies; interpolated, it cuts the lit region's
+  // edge sharply inside a cell. Nodes just beyond the paths hold the
+  // paths' continuation or an extrapolation.
+  struct GridNode {
+    double spread_w_m2 = 0;
+    double cos_incidence = -1;
+    double lit_margin_mm = -1;
+  };
+  double anterior_inner_index_ = 1;
+  std::vector<GridNode> nodes_;  // row-major, y rows of x columns, eye frame
+};
+
+// Procedural iris albedo at a point of the iris plane given in the eye
+// frame (mm), for the eye's appearance: radial fibres, crypts, a darker
+// collarette and limbal ring, from a seeded hash (no global state). The
+// mean over the iris is about appearance.iris_albedo; values stay in [0, 1].
+double iris_albedo(const EyeModel& model, const EyeAppearance& appearance, double x_mm, double y_mm);
+
+}  // namespace purkinje::renderer

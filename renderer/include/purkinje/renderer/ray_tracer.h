@@ -1,0 +1,71 @@
+#pragma once
+// The one Embree adapter: the scene's surfaces as exact analytic shapes
+// (Embree user geometry), intersected in double precision inside the
+// callbacks. No Embree type appears here, so an Embree 4 port touches
+// ray_tracer.cpp only.
+//
+// Surfaces built per eye: the anterior cornea (the conicoid cap inside the
+// limbus), the posterior cornea (two-surface eyes), the iris (an annulus in
+// the iris plane reaching out to the sclera), the pupil (the disc in the
+// iris plane: whatever is seen through it), the sclera (the sphere about the
+// centre of rotation, outside the limbus, with a short limbal band closing
+// the gap to the cornea's edge) and, when the eye has eyelids, the lids
+// (a sphere about the centre of rotation, minus the palpebral opening) and
+// the skin around them (a plane facing forward with a hole for the lids).
+
+#include <limits>
+#include <memory>
+
+#include "purkinje/models/geometry.h"
+#include "purkinje/models/scene.h"
+
+namespace purkinje::renderer {
+
+enum class Surface : unsigned char {
+  none = 0,  // the ray left the scene
+  skin,      // eyelids and the skin around them
+  sclera,
+  iris,
+  pupil,
+  cornea_anterior,
+  cornea_posterior,
+};
+const char* to_string(Surface s);
+
+struct Ray {
+  Point3 origin;
+  UnitVector3 direction = UnitVector3::unit_z();
+  double t_min = 0;
+  double t_max = std::numeric_limits<double>::infinity();
+};
+
+struct Hit {
+  Surface surface = Surface::none;
+  int eye = -1;             // index into scene.eyes
+  double t = 0;             // distance along the ray, mm
+  Point3 point;             // world, recomputed in double precision
+  UnitVector3 normal = UnitVector3::unit_z();  // outward (out of the eye; toward the front for skin and iris)
+  bool front_face = true;   // the ray meets the side `normal` points to
+};
+
+class RayTracer {
+ public:
+  explicit RayTracer(const Scene& scene);  // throws std::runtime_error on an Embree error
+  ~RayTracer();
+  RayTracer(const RayTracer&) = delete;
+  RayTracer& operator=(const RayTracer&) = delete;
+
+  Hit intersect(const Ray& ray) const;
+  // Whether any surface lies on the open segment between two points. The
+  // cornea counts: light does not pass it without refracting.
+  bool occluded(const Point3& from, const Point3& to) const;
+  // As occluded(), ignoring the anterior and posterior cornea (for a path
+  // whose refraction the caller handles, e.g. from a light to the cornea).
+  bool occluded_except_cornea(const Point3& from, const Point3& to) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace purkinje::renderer

@@ -1,0 +1,94 @@
+#pragma once
+// Rendering a scene as one of its cameras sees it: near-infrared radiance
+// from the eye, lids and skin, glints from the specular-path solver, the
+// sensor's response, AOVs, and labels that agree with the pixels.
+//
+// Fast mode (the default) is deterministic apart from sub-pixel jitter:
+// camera rays with Fresnel-weighted reflection and refraction at the
+// cornea, direct light with shadow rays, iris light through the cornea
+// from an exact cache on the iris plane (IrisIrradianceCache), glints
+// computed explicitly and imaged through the point-spread function.
+// Reference mode estimates the same light transport by brute force to
+// validate the fast mode (see docs/rendering.md).
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "purkinje/models/scene.h"
+#include "purkinje/models/truth.h"
+#include "purkinje/renderer/image.h"
+#include "purkinje/renderer/radiometry.h"
+
+namespace purkinje::renderer {
+
+enum class RenderMode { fast, reference };
+const char* to_string(RenderMode mode);
+
+// A rectangle of pixels, [x0, x1) x [y0, y1).
+struct PixelRegion {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+struct RenderOptions {
+  RenderMode mode = RenderMode::fast;
+  int samples_per_pixel = 4;      // camera rays per pixel, low-discrepancy with a seeded shift
+  std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
+  bool noise = true;              // false: no shot or read noise whatever the sensor says
+  int iris_cache_resolution = 33; // nodes per side of each iris irradiance cache (fast mode)
+  bool per_light_glint_masks = false;
+  // Trace only these pixels (the rest stay 0 in radiance and AOVs); glints
+  // and the sensor still cover the whole image. Absent: every pixel.
+  std::optional<PixelRegion> region;
+  int threads = 0;                // 0: all hardware threads; results do not depend on it
+  // Called from worker threads with the fraction of rows done; must be thread-safe.
+  std::function<void(double fraction)> progress;
+};
+
+// Pixel classes of the segmentation AOV ("id"): the first diffuse surface
+// a pixel's centre sees, through the cornea where it passes through it.
+enum class PixelClass : int { background = 0, skin = 1, sclera = 2, iris = 3, pupil = 4 };
+
+struct GlintImage {
+  int eye = 0;
+  int illuminator = 0;
+  PathStatus status = PathStatus::no_solution;  // as labelled (occluded when lids hide it)
+  GlintRadiometry radiometry;
+  double electrons = 0;  // total signal before saturation
+};
+
+struct RenderResult {
+  int camera = 0;
+  // Scene radiance averaged over each pixel, W m^-2 sr^-1, before the
+  // point-spread function and without glints (they are not resolved by
+  // pixel sampling; see `electrons`).
+  ImagePlane radiance;
+  // The noise-free linear image in electrons: radiance through the optics
+  // (point-spread function), glints added as point images.
+  ImagePlane electrons;
+  SensorImage sensor;           // noise, saturation, quantization
+  std::vector<NamedPlane> aovs; // depth, N.x/N.y/N.z, id, class coverages, glint masks
+  SceneTruth truth;             // compute_truth, with visibility applied for this camera
+  std::vector<GlintImage> glints;
+};
+
+RenderResult render(const Scene& scene, int camera, const RenderOptions& options = {});
+
+// The files of one rendered image: the sensor image (PNG), float radiance
+// with AOVs (EXR) and the labels (JSON: the `purkinje truth` schema plus a
+// "render" section with file names, sensor settings and glint radiometry).
+struct RenderFiles {
+  std::filesystem::path image, exr, labels;
+};
+// Writes <dir>/<stem>.png, .exr and .json all-or-nothing (FileSet);
+// throws OutputError naming the file and the reason.
+RenderFiles write_render(const std::filesystem::path& dir, const std::string& stem, const Scene& scene,
+                         const RenderResult& result, const RenderOptions& options);
+// The labels document written by write_render.
+std::string render_labels_json(const Scene& scene, const RenderResult& result,
+                               const RenderOptions& options, const RenderFiles& files);
+
+}  // namespace purkinje::renderer

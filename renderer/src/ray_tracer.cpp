@@ -1,0 +1,652 @@
+// The one Embree adapter (Embree 3): every surface of the scene is an Embree
+// user geometry with one primitive, whose callbacks intersect the exact
+// analytic shape of surfaces.h in double precision.
+//
+// Geometry. Eye frame (eye.h): origin at the anterior cornea's centre of
+// curvature, +z out along the optical axis. R = anterior radius, k = 1 + Q,
+// w = R - z the depth below the anterior apex, d_L = limbus depth,
+// z_L = R - d_L the limbus plane, r_L = limbus radius, z_c = R - (rotation
+// centre depth) the centre of rotation, R_s = sclera radius.
+//   cornea_anterior   x^2 + y^2 + k w^2 - 2 R w = 0, 0 <= w <= d_L.
+//   cornea_posterior  the posterior conicoid, apex at depth = thickness,
+//                     same orientation, no deeper than the limbus plane.
+//   sclera            the sphere |p - (0, 0, z_c)| = R_s behind the seam
+//                     z <= z_m, plus the limbal band from the cornea's edge
+//                     (radius r_L in the limbus plane) to the sphere:
+//                     - when the sphere reaches radius r_L behind the limbus
+//                       plane, at z_m = z_c + sqrt(R_s^2 - r_L^2) < z_L: the
+//                       cylinder of radius r_L for z_m <= z <= z_L;
+//                     - otherwise z_m = z_L and the band is the annulus of
+//                       the limbus plane between r_L and the sphere.
+//                     Cap, band and sphere close the eye: a ray from outside
+//                     meets this shell before anything inside it.
+//   iris, pupil       the plane z = R - iris depth: the pupil is the disc
+//                     about the decentred pupil centre, the iris the rest
+//                     out to max(iris radius, the shell's radius there), so
+//                     that the anterior chamber is closed too.
+// Head frame (eyelids, when the appearance has them): origin at the centre
+// of rotation, z = head_forward, y = head_up made perpendicular to z,
+// x = y cross z. R_l = rotation centre depth + 0.3 mm (the corneal apex,
+// at most rotation-centre-depth from the origin, clears it in every gaze),
+// z_f = 0.45 R_l.
+//   skin (lids)       the sphere |p| = R_l where z >= z_f, minus the
+//                     palpebral opening (surfaces.h), both sides.
+//   skin (face)       the plane z = z_f from the lid sphere's rim out to
+//                     150 mm; with several eyes, each eye's face stops
+//                     half way to the other eyes' centres of rotation, so a
+//                     face never covers another eye.
+//   skin (socket)     the rest of the lid sphere, z < z_f, closed: near the
+//                     canthi the opening reaches beyond the eyeball's
+//                     silhouette, and rays through that gap meet the socket
+//                     (from inside) instead of the background.
+// Outward normals: out of the eye, forward for the iris, pupil and face,
+// away from the centre of rotation for the lids.
+//
+// Precision. Embree traces float rays. The callbacks ignore the float ray
+// and intersect the caller's double ray, which the query context carries
+// (indexed by the Embree ray's id, so that ray packets can be added
+// later); the float ray serves traversal only. To keep that traversal
+// conservative, the float ray starts where the double ray enters the
+// scene's bounds (its origin then has millimetre-sized coordinates), the
+// geometry bounds are padded and the float tfar is rounded up. Each
+// callback moves the ray origin to its closest approach to the shape's
+// local origin before solving, so quadratics never cancel metre-sized
+// terms: hit points are exact to ~1e-13 mm.
+//
+// Ignoring the cornea (occluded_except_cornea): a flag in the query context
+// read by the cornea's callbacks; when this Embree build supports ray
+// masks, the cornea also gets its own mask bit so that traversal skips it.
+
+#include "purkinje/renderer/ray_tracer.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "surfaces.h"
+
+namespace purkinje::renderer {
+
+const char* to_string(Surface s) {
+  switch (s) {
+    case Surface::none: return "none";
+    case Surface::skin: return "skin";
+    case Surface::sclera: return "sclera";
+    case Surface::iris: return "iris";
+    case Surface::pupil: return "pupil";
+    case Surface::cornea_anterior: return "cornea_anterior";
+    case Surface::cornea_posterior: return "cornea_posterior";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using surfaces::Box;
+using surfaces::Segment;
+
+constexpr double kLidClearanceMm = 0.3;
+constexpr double kFaceHeightFraction = 0.45;
+constexpr double kFaceRadiusMm = 150.0;
+constexpr unsigned kCorneaMask = 1u;
+constexpr unsigned kOtherMask = 2u;
+
+class PlacedSurface;
+
+// A local frame (eye or head), shared by the surfaces built in it. The
+// world-to-local map is kept as plain numbers so the hot path inlines it.
+class Frame {
+ public:
+  explicit Frame(const Pose& world_from_local) : world_from_local_(world_from_local) {
+    const Pose local_from_world = world_from_local.inverse();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) m_[3 * i + j] = local_from_world.rotation()(i, j);
+    }
+    t_ = local_from_world.translation();
+  }
+  const Pose& world_from_local() const { return world_from_local_; }
+  Vector3 to_local(const Vector3& v) const {
+    return {m_[0] * v.x + m_[1] * v.y + m_[2] * v.z, m_[3] * v.x + m_[4] * v.y + m_[5] * v.z,
+            m_[6] * v.x + m_[7] * v.y + m_[8] * v.z};
+  }
+  Point3 to_local(const Point3& p) const { return Point3::origin() + to_local(p.from_origin()) + t_; }
+
+ private:
+  Pose world_from_local_;
+  double m_[9];
+  Vector3 t_;
+};
+
+// One ray of a query, in double precision.
+struct Lane {
+  Point3 origin;
+  Vector3 direction;
+  double t_lo = 0;
+  double t_hi = 0;     // shrinks to the closest hit so far
+  double t_shift = 0;  // the Embree ray starts at origin + t_shift direction
+  const PlacedSurface* surface = nullptr;  // the closest hit, or the occluder
+  Point3 local_point;
+  // The ray in the last frame used: an eye's surfaces share one frame, so
+  // most callbacks skip the transform.
+  const Frame* frame = nullptr;
+  Point3 local_origin;  // the closest approach to the frame's origin
+  Vector3 local_direction;
+  double local_shift = 0;  // t of local_origin
+};
+
+// One Embree geometry: a shape placed in the world by its local frame.
+class PlacedSurface {
+ public:
+  PlacedSurface(Surface kind, int eye, std::shared_ptr<const Frame> frame)
+      : kind_(kind), eye_(eye), frame_(std::move(frame)) {}
+  virtual ~PlacedSurface() = default;
+
+  Surface kind() const { return kind_; }
+  int eye() const { return eye_; }
+  bool is_cornea() const {
+    return kind_ == Surface::cornea_anterior || kind_ == Surface::cornea_posterior;
+  }
+
+  // First hit of the lane's ray with t in (t_lo, t_hi); the local point too.
+  bool hit(Lane& lane, double& t, Point3& local_point) const {
+    if (lane.frame != frame_.get()) {
+      const Point3 o = frame_->to_local(lane.origin);
+      const Vector3 d = frame_->to_local(lane.direction);
+      // Solve from the closest approach to the local origin: the shapes'
+      // coefficients are then millimetre-sized whatever the ray's origin.
+      lane.local_shift = -dot(o.from_origin(), d);
+      lane.local_origin = o + d * lane.local_shift;
+      lane.local_direction = d;
+      lane.frame = frame_.get();
+    }
+    const double shift = lane.local_shift;
+    const Segment segment{lane.local_origin, lane.local_direction, lane.t_lo - shift,
+                          lane.t_hi - shift};
+    double r;
+    if (!first_hit(segment, r)) return false;
+    t = shift + r;
+    local_point = segment.origin + segment.direction * r;
+    return true;
+  }
+
+  UnitVector3 world_normal(const Point3& local_point) const {
+    return UnitVector3::normalize(frame_->world_from_local() * local_normal(local_point));
+  }
+
+  // The world bounds of the local box, padded so that float traversal of a
+  // ray starting within the scene's bounds never misses a double hit.
+  Box world_bounds() const {
+    const Box local = local_bounds();
+    Box world{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    double extent = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Point3 p =
+          frame_->world_from_local() * Point3{(corner & 1) ? local.hi.x : local.lo.x,
+                                              (corner & 2) ? local.hi.y : local.lo.y,
+                                              (corner & 4) ? local.hi.z : local.lo.z};
+      world.lo = {std::min(world.lo.x, p.x), std::min(world.lo.y, p.y), std::min(world.lo.z, p.z)};
+      world.hi = {std::max(world.hi.x, p.x), std::max(world.hi.y, p.y), std::max(world.hi.z, p.z)};
+      extent = std::max({extent, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    }
+    const double pad = 1e-3 + 1e-6 * extent;
+    world.lo = world.lo - Vector3{pad, pad, pad};
+    world.hi = world.hi + Vector3{pad, pad, pad};
+    return world;
+  }
+
+ protected:
+  virtual bool first_hit(const Segment& segment, double& t) const = 0;
+  virtual Vector3 local_normal(const Point3& p) const = 0;
+  virtual Box local_bounds() const = 0;
+
+ private:
+  Surface kind_;
+  int eye_;
+  std::shared_ptr<const Frame> frame_;
+};
+
+template <class Shape>
+class Placed final : public PlacedSurface {
+ public:
+  Placed(Surface kind, int eye, std::shared_ptr<const Frame> frame, Shape shape)
+      : PlacedSurface(kind, eye, std::move(frame)), shape_(std::move(shape)) {}
+
+ private:
+  bool first_hit(const Segment& segment, double& t) const override {
+    return shape_.first_hit(segment, t);
+  }
+  Vector3 local_normal(const Point3& p) const override { return shape_.normal(p); }
+  Box local_bounds() const override { return shape_.bounds(); }
+
+  Shape shape_;
+};
+
+// Embree hands the context pointer back to the callbacks, so extending it
+// carries the double rays to them (the Embree 3 idiom; Embree 4 keeps it
+// as RTCRayQueryContext).
+struct Query {
+  RTCIntersectContext embree;
+  Lane* lanes = nullptr;
+  bool skip_cornea = false;
+};
+static_assert(std::is_standard_layout_v<Query> && offsetof(Query, embree) == 0);
+
+// A float distance for Embree at or beyond the double one (traversal culls
+// beyond tfar, so it must never fall short).
+float embree_far(double t) { return static_cast<float>(t * (1.0 + 1e-6) + 1e-4); }
+
+void bounds_callback(const RTCBoundsFunctionArguments* args) {
+  const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
+  const Box b = surface.world_bounds();
+  RTCBounds* out = args->bounds_o;
+  out->lower_x = std::nextafter(static_cast<float>(b.lo.x), -INFINITY);
+  out->lower_y = std::nextafter(static_cast<float>(b.lo.y), -INFINITY);
+  out->lower_z = std::nextafter(static_cast<float>(b.lo.z), -INFINITY);
+  out->upper_x = std::nextafter(static_cast<float>(b.hi.x), INFINITY);
+  out->upper_y = std::nextafter(static_cast<float>(b.hi.y), INFINITY);
+  out->upper_z = std::nextafter(static_cast<float>(b.hi.z), INFINITY);
+}
+
+void intersect_callback(const RTCIntersectFunctionNArguments* args) {
+  auto* query = reinterpret_cast<Query*>(args->context);
+  const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
+  if (query->skip_cornea && surface.is_cornea()) return;
+  RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
+  RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Lane& lane = query->lanes[RTCRayN_id(rays, args->N, i)];
+    double t;
+    Point3 local_point;
+    if (!surface.hit(lane, t, local_point)) continue;
+    lane.t_hi = t;
+    lane.surface = &surface;
+    lane.local_point = local_point;
+    RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
+    RTCHitN_geomID(hits, args->N, i) = args->geomID;
+    RTCHitN_primID(hits, args->N, i) = args->primID;
+    RTCHitN_instID(hits, args->N, i, 0) = query->embree.instID[0];
+    RTCHitN_Ng_x(hits, args->N, i) = 0.0f;
+    RTCHitN_Ng_y(hits, args->N, i) = 0.0f;
+    RTCHitN_Ng_z(hits, args->N, i) = 0.0f;
+    RTCHitN_u(hits, args->N, i) = 0.0f;
+    RTCHitN_v(hits, args->N, i) = 0.0f;
+  }
+}
+
+void occluded_callback(const RTCOccludedFunctionNArguments* args) {
+  auto* query = reinterpret_cast<Query*>(args->context);
+  const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
+  if (query->skip_cornea && surface.is_cornea()) return;
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
+    if (lane.surface) continue;
+    double t;
+    Point3 local_point;
+    if (!surface.hit(lane, t, local_point)) continue;
+    lane.surface = &surface;
+    RTCRayN_tfar(args->ray, args->N, i) = -INFINITY;  // Embree's "occluded"
+  }
+}
+
+// Clips the ray's [t0, t1] to a box; false when they do not meet.
+bool clip_to_box(const Box& box, const Point3& o, const Vector3& d, double& t0, double& t1) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const double lo = box.lo[axis], hi = box.hi[axis], oa = o[axis], da = d[axis];
+    if (da == 0.0) {
+      if (oa < lo || oa > hi) return false;
+      continue;
+    }
+    double ta = (lo - oa) / da, tb = (hi - oa) / da;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+std::string eye_label(int index, const EyeModel& m) {
+  return "RayTracer: eyes[" + std::to_string(index) + "] (" + m.name + ")";
+}
+
+[[noreturn]] void fail_eye(int index, const EyeModel& m, const std::string& what) {
+  throw std::invalid_argument(eye_label(index, m) + ": " + what);
+}
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
+
+template <class Shape>
+void add(SurfaceList& list, Surface kind, int eye, const std::shared_ptr<const Frame>& frame,
+         Shape shape) {
+  list.push_back(std::make_unique<Placed<Shape>>(kind, eye, frame, std::move(shape)));
+}
+
+void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
+  const EyeModel& m = eye.model();
+  const auto world_from_eye = std::make_shared<const Frame>(eye.world_from_eye());
+  const double R = m.anterior_cornea.radius_mm;
+  const double d_L = m.limbus_depth_mm();
+  const double r_L = m.limbus_radius_mm;
+  if (!(R > 0) || !std::isfinite(R)) fail_eye(index, m, "anterior radius_mm = " + number(R) + ": must be > 0");
+  if (!(r_L > 0) || !(d_L > 0) || !std::isfinite(d_L)) {
+    fail_eye(index, m, "limbus_radius_mm = " + number(r_L) +
+                           ": the anterior cornea does not reach a limbus of that radius");
+  }
+  const double z_L = R - d_L;
+  add(list, Surface::cornea_anterior, index, world_from_eye,
+      surfaces::ConicoidCap{R, 1.0 + m.anterior_cornea.asphericity, R, d_L});
+
+  if (m.posterior_cornea) {
+    const PosteriorCornea& p = *m.posterior_cornea;
+    const double depth = d_L - p.thickness_mm;
+    if (!(depth > 0) || !(p.surface.radius_mm > 0)) {
+      fail_eye(index, m, "posterior cornea (thickness_mm = " + number(p.thickness_mm) +
+                             ", radius_mm = " + number(p.surface.radius_mm) +
+                             ") must have a positive radius and start in front of the limbus plane (" +
+                             number(d_L) + " mm deep)");
+    }
+    add(list, Surface::cornea_posterior, index, world_from_eye,
+        surfaces::ConicoidCap{p.surface.radius_mm, 1.0 + p.surface.asphericity,
+                              R - p.thickness_mm, depth});
+  }
+
+  // Sclera and the limbal band between it and the cornea's edge.
+  const double R_s = m.sclera_radius_mm;
+  const double z_c = R - m.rotation_center_depth_mm;
+  const double h = z_L - z_c;  // height of the limbus plane above the centre of rotation
+  if (!(R_s > 0) || !(h > 0)) {
+    fail_eye(index, m, "sclera_radius_mm = " + number(R_s) + " and rotation_center_depth_mm = " +
+                           number(m.rotation_center_depth_mm) +
+                           ": the sclera must have a positive radius and the limbus plane must lie "
+                           "in front of the centre of rotation");
+  }
+  double z_seam;  // the sphere is kept behind this plane
+  if (R_s >= r_L && std::sqrt(R_s * R_s - r_L * r_L) < h) {
+    z_seam = z_c + std::sqrt(R_s * R_s - r_L * r_L);
+    add(list, Surface::sclera, index, world_from_eye, surfaces::Cylinder{r_L, z_seam, z_L});
+  } else if (h < R_s) {
+    z_seam = z_L;
+    const double rho = std::sqrt(R_s * R_s - h * h);
+    surfaces::PlaneRegion annulus;
+    annulus.z_mm = z_L;
+    annulus.outer_radius_mm = std::max(rho, r_L);
+    annulus.hole_radius_mm = std::min(rho, r_L);
+    add(list, Surface::sclera, index, world_from_eye, std::move(annulus));
+  } else {
+    fail_eye(index, m, "sclera_radius_mm = " + number(R_s) +
+                           " is smaller than the limbus radius and does not reach the limbus plane: "
+                           "the sclera cannot be joined to the cornea");
+  }
+  add(list, Surface::sclera, index, world_from_eye,
+      surfaces::SphereBelowPlane{{0, 0, z_c}, R_s, z_seam});
+
+  // Iris and pupil, the iris reaching out to the shell.
+  const double z_I = R - m.iris_depth_mm;
+  double wall = 0;
+  if (z_I <= z_seam) {
+    if (std::abs(z_I - z_c) < R_s) wall = std::sqrt(R_s * R_s - (z_I - z_c) * (z_I - z_c));
+  } else if (z_I <= z_L) {
+    wall = r_L;  // beside the cylindrical band
+  }
+  const double r_p = m.pupil_radius_mm;
+  surfaces::PlaneRegion iris;
+  iris.z_mm = z_I;
+  iris.outer_radius_mm = std::max(m.iris_radius_mm, wall);
+  iris.hole_x_mm = m.pupil_decentration_x_mm;
+  iris.hole_y_mm = m.pupil_decentration_y_mm;
+  iris.hole_radius_mm = r_p;
+  add(list, Surface::iris, index, world_from_eye, std::move(iris));
+  if (r_p > 0) {
+    surfaces::PlaneRegion pupil;
+    pupil.z_mm = z_I;
+    pupil.outer_x_mm = m.pupil_decentration_x_mm;
+    pupil.outer_y_mm = m.pupil_decentration_y_mm;
+    pupil.outer_radius_mm = r_p;
+    add(list, Surface::pupil, index, world_from_eye, std::move(pupil));
+  }
+}
+
+void add_lids(SurfaceList& list, int index, const Scene& scene) {
+  const Eye& eye = scene.eyes[index];
+  const EyeAppearance& look = eye.appearance();
+  const Eyelids& lids = *look.eyelids;
+  const UnitVector3 z = look.head_forward;
+  const auto y = UnitVector3::try_normalize(look.head_up.vector() - z.vector() * dot(look.head_up, z));
+  if (!y) fail_eye(index, eye.model(), "appearance head_up is parallel to head_forward");
+  const UnitVector3 x = UnitVector3::normalize(cross(*y, z));
+  const Pose head_pose(Rotation::from_columns(x, *y, z), eye.rotation_center().from_origin());
+  const Pose head_from_world = head_pose.inverse();
+  const auto world_from_head = std::make_shared<const Frame>(head_pose);
+
+  const double R_l = eye.model().rotation_center_depth_mm + kLidClearanceMm;
+  const double z_f = kFaceHeightFraction * R_l;
+  surfaces::EyelidSphere lid;
+  lid.radius_mm = R_l;
+  lid.min_z_mm = z_f;
+  lid.max_z_mm = R_l;
+  lid.opening = {lids.opening, lids.upper_margin_mm, lids.lower_margin_mm, lids.closing_line_mm,
+                 lids.half_width_mm};
+  add(list, Surface::skin, index, world_from_head, lid);
+  // The socket: the rest of the sphere, behind the face, without an
+  // opening. Near the canthi the opening reaches past the eyeball's
+  // silhouette; without the socket those rays would see the background.
+  surfaces::EyelidSphere socket;
+  socket.radius_mm = R_l;
+  socket.min_z_mm = -R_l;
+  socket.max_z_mm = z_f;
+  socket.opening.opening = 0.0;  // contains no point
+  add(list, Surface::skin, index, world_from_head, socket);
+
+  surfaces::PlaneRegion face;
+  face.z_mm = z_f;
+  face.outer_radius_mm = kFaceRadiusMm;
+  face.hole_radius_mm = std::sqrt(R_l * R_l - z_f * z_f);
+  for (std::size_t j = 0; j < scene.eyes.size(); ++j) {
+    if (static_cast<int>(j) == index) continue;
+    const Vector3 other = (head_from_world * scene.eyes[j].rotation_center()).from_origin();
+    const double gap = other.norm();
+    if (!(gap > 1e-9)) continue;  // the same place: nothing to split
+    face.cuts.push_back({other / gap, 0.5 * gap + surfaces::kSeamOverlapMm});
+  }
+  add(list, Surface::skin, index, world_from_head, std::move(face));
+}
+
+void check_ray(const Point3& origin, const Vector3& direction, double t_min, double t_max) {
+  if (!origin.is_finite() || !direction.is_finite() || !(t_min >= 0) || std::isnan(t_max)) {
+    std::ostringstream msg;
+    msg << "RayTracer: invalid ray: origin (" << origin.x << ", " << origin.y << ", " << origin.z
+        << "), direction (" << direction.x << ", " << direction.y << ", " << direction.z
+        << "), t_min " << t_min << ", t_max " << t_max
+        << ": coordinates must be finite and 0 <= t_min";
+    throw std::invalid_argument(msg.str());
+  }
+}
+
+}  // namespace
+
+struct RayTracer::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  SurfaceList surfaces;
+  Box bounds{{0, 0, 0}, {0, 0, 0}};
+  bool empty = true;
+  bool masks = false;
+
+  std::mutex error_mutex;
+  std::string error_message;
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+
+  static void on_error(void* user, RTCError code, const char* message) {
+    auto* self = static_cast<Impl*>(user);
+    const std::lock_guard lock(self->error_mutex);
+    self->error_message = message ? message : "error code " + std::to_string(static_cast<int>(code));
+  }
+
+  void check(const char* doing) {
+    const RTCError code = rtcGetDeviceError(device);
+    if (code == RTC_ERROR_NONE) return;
+    const std::lock_guard lock(error_mutex);
+    throw std::runtime_error(std::string("Embree failed while ") + doing + ": " +
+                             (error_message.empty() ? "error code " + std::to_string(static_cast<int>(code))
+                                                    : error_message));
+  }
+
+  // Runs the query on `lane`; false when the ray misses the scene's bounds.
+  template <bool kOcclusion>
+  void run(Lane& lane, bool skip_cornea) const {
+    double t0 = lane.t_lo, t1 = lane.t_hi;
+    if (empty || !clip_to_box(bounds, lane.origin, lane.direction, t0, t1)) return;
+    lane.t_shift = t0;
+    const Point3 start = lane.origin + lane.direction * t0;
+
+    Query query;
+    rtcInitIntersectContext(&query.embree);
+    query.lanes = &lane;
+    query.skip_cornea = skip_cornea;
+
+    RTCRayHit rayhit;
+    RTCRay& ray = rayhit.ray;
+    ray.org_x = static_cast<float>(start.x);
+    ray.org_y = static_cast<float>(start.y);
+    ray.org_z = static_cast<float>(start.z);
+    ray.tnear = 0.0f;
+    ray.dir_x = static_cast<float>(lane.direction.x);
+    ray.dir_y = static_cast<float>(lane.direction.y);
+    ray.dir_z = static_cast<float>(lane.direction.z);
+    ray.time = 0.0f;
+    ray.tfar = embree_far(t1 - t0);
+    ray.mask = skip_cornea && masks ? kOtherMask : ~0u;
+    ray.id = 0;  // the lane
+    ray.flags = 0;
+    if constexpr (kOcclusion) {
+      rtcOccluded1(scene, &query.embree, &ray);
+    } else {
+      rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene, &query.embree, &rayhit);
+    }
+  }
+
+  bool occluded(const Point3& from, const Point3& to, bool skip_cornea) const {
+    const Vector3 v = to - from;
+    check_ray(from, v, 0, 0);
+    check_ray(to, v, 0, 0);
+    const double length = v.norm();
+    const double eps = 1e-6 * length + 1e-9;
+    if (!(length > 2 * eps)) return false;
+    Lane lane;
+    lane.origin = from;
+    lane.direction = v / length;
+    lane.t_lo = eps;
+    lane.t_hi = length - eps;
+    run<true>(lane, skip_cornea);
+    return lane.surface != nullptr;
+  }
+};
+
+RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  Impl& impl = *impl_;
+  for (std::size_t i = 0; i < scene.eyes.size(); ++i) {
+    const int index = static_cast<int>(i);
+    add_eyeball(impl.surfaces, index, scene.eyes[i]);
+    if (scene.eyes[i].appearance().eyelids) add_lids(impl.surfaces, index, scene);
+  }
+
+  impl.device = rtcNewDevice(nullptr);
+  if (!impl.device) {
+    throw std::runtime_error("Embree failed to create a device: error code " +
+                             std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))));
+  }
+  rtcSetDeviceErrorFunction(impl.device, &Impl::on_error, &impl);
+  impl.masks = rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+  impl.scene = rtcNewScene(impl.device);
+  impl.check("creating a scene");
+  rtcSetSceneFlags(impl.scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(impl.scene, RTC_BUILD_QUALITY_HIGH);
+
+  Box bounds{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+  for (const auto& surface : impl.surfaces) {
+    RTCGeometry geometry = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_USER);
+    impl.check("creating a user geometry");
+    rtcSetGeometryUserPrimitiveCount(geometry, 1);
+    rtcSetGeometryUserData(geometry, surface.get());
+    rtcSetGeometryBoundsFunction(geometry, &bounds_callback, nullptr);
+    rtcSetGeometryIntersectFunction(geometry, &intersect_callback);
+    rtcSetGeometryOccludedFunction(geometry, &occluded_callback);
+    if (impl.masks) rtcSetGeometryMask(geometry, surface->is_cornea() ? kCorneaMask : kOtherMask);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(impl.scene, geometry);
+    rtcReleaseGeometry(geometry);
+    impl.check("adding a surface");
+
+    const Box b = surface->world_bounds();
+    bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
+                 std::min(bounds.lo.z, b.lo.z)};
+    bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
+                 std::max(bounds.hi.z, b.hi.z)};
+  }
+  rtcCommitScene(impl.scene);
+  impl.check("building the scene");
+  impl.empty = impl.surfaces.empty();
+  if (!impl.empty) {
+    // A margin more, so that a float ray starting on this box starts
+    // clear of every geometry's (padded) bounds.
+    const Vector3 pad{1e-3, 1e-3, 1e-3};
+    impl.bounds = {bounds.lo - pad, bounds.hi + pad};
+  }
+}
+
+RayTracer::~RayTracer() = default;
+
+Hit RayTracer::intersect(const Ray& ray) const {
+  check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
+  Hit hit;
+  if (!(ray.t_min < ray.t_max)) return hit;
+  Lane lane;
+  lane.origin = ray.origin;
+  lane.direction = ray.direction;
+  lane.t_lo = ray.t_min;
+  lane.t_hi = ray.t_max;
+  impl_->run<false>(lane, false);
+  if (!lane.surface) return hit;
+  hit.surface = lane.surface->kind();
+  hit.eye = lane.surface->eye();
+  hit.t = lane.t_hi;
+  hit.point = ray.origin + ray.direction * lane.t_hi;
+  hit.normal = lane.surface->world_normal(lane.local_point);
+  hit.front_face = dot(ray.direction, hit.normal) < 0;
+  return hit;
+}
+
+bool RayTracer::occluded(const Point3& from, const Point3& to) const {
+  return impl_->occluded(from, to, false);
+}
+
+bool RayTracer::occluded_except_cornea(const Point3& from, const Point3& to) const {
+  return impl_->occluded(from, to, true);
+}
+
+}  // namespace purkinje::renderer

@@ -1,0 +1,434 @@
+// The integrator: camera rays through the scene, shading, glints, sensor.
+// Physics and its approximations are documented in docs/rendering.md.
+
+#include "purkinje/renderer/render.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <atomic>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "purkinje/renderer/ray_tracer.h"
+#include "purkinje/renderer/sensor_model.h"
+
+namespace purkinje::renderer {
+
+const char* to_string(RenderMode mode) {
+  switch (mode) {
+    case RenderMode::fast: return "fast";
+    case RenderMode::reference: return "reference";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr double kInvPi = 1.0 / std::numbers::pi;
+// Scene lengths are mm; irradiance is per m^2.
+constexpr double kPerSquareMm = 1e6;
+// Secondary rays start this far off the surface they leave (mm); hits are
+// exact in double precision, so a nanometre is plenty.
+constexpr double kRayOffsetMm = 1e-6;
+// Interfaces crossed or reflected at before a path is dropped: enough for
+// both corneal surfaces in and out plus a reflection.
+constexpr int kMaxSpecularDepth = 6;
+// A branch whose weight falls below this cannot change an 8- to 16-bit
+// pixel noticeably.
+constexpr double kMinBranchWeight = 1e-4;
+
+// Random-number streams (see uniform01): one per purpose.
+enum Stream : std::uint64_t { kJitterStream = 1, kSensorStream = 2 };
+
+struct Light {
+  Point3 position;
+  double intensity_w_sr = 0;
+  double electrons_per_radiance = 0;  // for this light's wavelength
+};
+
+// What a path contributes: physical radiance, and the electrons it yields
+// (radiance weighted by each light's wavelength response).
+struct Contribution {
+  double radiance = 0;
+  double electrons = 0;
+};
+
+// What the pixel's primary path saw first, for AOVs.
+struct PrimaryRecord {
+  PixelClass pixel_class = PixelClass::background;
+  bool hit = false;
+  double depth_mm = 0;
+  Vector3 normal;
+  bool through_cornea = false;
+};
+
+PixelClass class_of(Surface s) {
+  switch (s) {
+    case Surface::skin: return PixelClass::skin;
+    case Surface::sclera: return PixelClass::sclera;
+    case Surface::iris: return PixelClass::iris;
+    case Surface::pupil: return PixelClass::pupil;
+    default: return PixelClass::background;
+  }
+}
+
+class Integrator {
+ public:
+  Integrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
+             const RenderOptions& options)
+      : scene_(scene), camera_(camera), tracer_(tracer) {
+    for (const Illuminator& l : scene.illuminators) {
+      lights_.push_back({l.position, l.radiant_intensity_w_sr,
+                         electrons_per_unit_radiance(camera.sensor(), l.wavelength_nm)});
+    }
+    const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
+      return !tracer_.occluded_except_cornea(light, cornea);
+    };
+    iris_.resize(scene.eyes.size());
+    for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+      for (const Light& l : lights_) {
+        iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr,
+                              options.iris_cache_resolution, visible);
+      }
+    }
+  }
+
+  // Radiance arriving along `ray`, times `weight`, added to `out`.
+  // `record` is filled along the transmitted chain of the primary path.
+  void trace(const Ray& ray, int depth, double weight, Contribution& out,
+             PrimaryRecord* record) const {
+    const Hit hit = tracer_.intersect(ray);
+    if (record && depth == 0 && hit.surface != Surface::none) {
+      record->hit = true;
+      record->depth_mm = (camera_.camera_from_world() * hit.point).z;
+      record->normal = hit.normal;
+      record->through_cornea = hit.surface == Surface::cornea_anterior;
+    }
+    switch (hit.surface) {
+      case Surface::none:
+        return;
+      case Surface::skin:
+      case Surface::sclera: {
+        if (record) record->pixel_class = class_of(hit.surface);
+        if (hit.surface == Surface::sclera && !hit.front_face) return;  // the eye's dark inside
+        const EyeAppearance& look = scene_.eyes[hit.eye].appearance();
+        const double albedo = hit.surface == Surface::skin ? look.skin_albedo : look.sclera_albedo;
+        direct_light(hit, albedo * weight, out);
+        return;
+      }
+      case Surface::iris: {
+        if (record) record->pixel_class = PixelClass::iris;
+        iris_light(hit, weight, out);
+        return;
+      }
+      case Surface::pupil:
+        // Dark pupil: the fundus returns (almost) nothing toward the camera.
+        if (record) record->pixel_class = PixelClass::pupil;
+        return;
+      case Surface::cornea_anterior:
+      case Surface::cornea_posterior:
+        interface(ray, hit, depth, weight, out, record);
+        return;
+    }
+  }
+
+ private:
+  // Lambertian surface lit directly by the point lights; `scaled_albedo`
+  // carries the path weight.
+  void direct_light(const Hit& hit, double scaled_albedo, Contribution& out) const {
+    const Vector3 n = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
+    const Point3 origin = hit.point + n * kRayOffsetMm;
+    for (const Light& l : lights_) {
+      const Vector3 to_light = l.position - hit.point;
+      const double d2 = to_light.squared_norm();
+      const double cos_theta = dot(n, to_light) / std::sqrt(d2);
+      if (!(cos_theta > 0)) continue;
+      if (tracer_.occluded(origin, l.position)) continue;
+      const double radiance = scaled_albedo * kInvPi * l.intensity_w_sr * cos_theta / d2 * kPerSquareMm;
+      out.radiance += radiance;
+      out.electrons += radiance * l.electrons_per_radiance;
+    }
+  }
+
+  void iris_light(const Hit& hit, double weight, Contribution& out) const {
+    const Eye& eye = scene_.eyes[hit.eye];
+    const Point3 local = eye.eye_from_world() * hit.point;
+    const double albedo = iris_albedo(eye.model(), eye.appearance(), local.x, local.y);
+    for (std::size_t k = 0; k < lights_.size(); ++k) {
+      const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
+      const double radiance = weight * albedo * kInvPi * e;
+      out.radiance += radiance;
+      out.electrons += radiance * lights_[k].electrons_per_radiance;
+    }
+  }
+
+  // Fresnel reflection and refraction at a corneal surface. Radiance
+  // crossing from index n2 into n1 scales by (n1 / n2)^2.
+  void interface(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
+                 PrimaryRecord* record) const {
+    if (depth >= kMaxSpecularDepth) return;
+    const EyeModel& m = scene_.eyes[hit.eye].model();
+    double n_outer = 1.0, n_inner = anterior_inner_index(m);
+    if (hit.surface == Surface::cornea_posterior) {
+      n_outer = m.posterior_cornea->cornea_index;
+      n_inner = m.aqueous_index;
+    }
+    const Vector3 d = ray.direction.vector();
+    const bool entering = dot(d, hit.normal.vector()) < 0;
+    const double n1 = entering ? n_outer : n_inner;
+    const double n2 = entering ? n_inner : n_outer;
+    const Vector3 facing = entering ? hit.normal.vector() : -hit.normal.vector();
+    const double cos_i = std::clamp(-dot(d, facing), 0.0, 1.0);
+    const double reflectance = fresnel_reflectance(cos_i, n1, n2);
+
+    if (reflectance < 1.0) {
+      const double eta = n1 / n2;
+      const double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+      const Vector3 t = d * eta + facing * (eta * cos_i - std::sqrt(std::max(k, 0.0)));
+      if (const auto dir = UnitVector3::try_normalize(t)) {
+        const double w = weight * (1.0 - reflectance) * eta * eta;
+        if (w > kMinBranchWeight * 1e-3) {
+          trace({hit.point - facing * kRayOffsetMm, *dir}, depth + 1, w, out, record);
+        }
+      }
+    }
+    const double w_reflected = weight * reflectance;
+    if (w_reflected > kMinBranchWeight) {
+      if (const auto dir = UnitVector3::try_normalize(d + facing * (2.0 * cos_i))) {
+        trace({hit.point + facing * kRayOffsetMm, *dir}, depth + 1, w_reflected, out, nullptr);
+      }
+    }
+  }
+
+  const Scene& scene_;
+  const Camera& camera_;
+  const RayTracer& tracer_;
+  std::vector<Light> lights_;
+  std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
+};
+
+// Additive recurrence (the R2 sequence): well-spread sub-pixel positions
+// for any sample count; a per-pixel random shift decorrelates pixels.
+std::array<double, 2> subpixel_offset(int sample, double shift_u, double shift_v) {
+  constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
+  const double u = shift_u + a1 * sample, v = shift_v + a2 * sample;
+  return {u - std::floor(u), v - std::floor(v)};
+}
+
+void validate(const Scene& scene, int camera, const RenderOptions& options) {
+  if (camera < 0 || camera >= static_cast<int>(scene.cameras.size())) {
+    throw std::invalid_argument("render: camera index " + std::to_string(camera) +
+                                " is out of range (scene has " +
+                                std::to_string(scene.cameras.size()) + " cameras)");
+  }
+  if (options.samples_per_pixel < 1 || options.samples_per_pixel > 1 << 20) {
+    throw std::invalid_argument("render: samples_per_pixel = " +
+                                std::to_string(options.samples_per_pixel) +
+                                ": must be in [1, 1048576]");
+  }
+  if (options.iris_cache_resolution < 2 || options.iris_cache_resolution > 4096) {
+    throw std::invalid_argument("render: iris_cache_resolution = " +
+                                std::to_string(options.iris_cache_resolution) +
+                                ": must be in [2, 4096]");
+  }
+  if (options.region) {
+    const PixelRegion& r = *options.region;
+    const Intrinsics& k = scene.cameras[camera].intrinsics();
+    if (r.x0 < 0 || r.y0 < 0 || r.x1 > k.width || r.y1 > k.height || r.x0 >= r.x1 || r.y0 >= r.y1) {
+      throw std::invalid_argument("render: region [" + std::to_string(r.x0) + ", " + std::to_string(r.x1) +
+                                  ") x [" + std::to_string(r.y0) + ", " + std::to_string(r.y1) +
+                                  ") must be a non-empty part of the " + std::to_string(k.width) + "x" +
+                                  std::to_string(k.height) + " image");
+    }
+  }
+  if (options.threads < 0) {
+    throw std::invalid_argument("render: threads = " + std::to_string(options.threads) +
+                                ": must be >= 0 (0: all)");
+  }
+  if (options.mode == RenderMode::reference) {
+    throw std::invalid_argument("render: the reference mode is not available yet");
+  }
+}
+
+// Labels agree with what the camera can see: a glint or pupil point whose
+// light is blocked by the lids or the sclera is marked occluded.
+void apply_visibility(const Scene& scene, int camera, const RayTracer& tracer, SceneTruth& truth) {
+  const Point3 center = scene.cameras[camera].center();
+  for (EyeInCameraTruth& view : truth.views) {
+    if (view.camera != camera) continue;
+    for (GlintTruth& g : view.glints) {
+      if (g.status != PathStatus::ok) continue;
+      const Point3& p = g.reflection.point;
+      if (tracer.occluded_except_cornea(scene.illuminators[g.illuminator].position, p) ||
+          tracer.occluded_except_cornea(p, center)) {
+        g.status = PathStatus::occluded;
+      }
+    }
+    for (PupilBorderPointTruth& b : view.pupil.border) {
+      if (b.status == PathStatus::ok && tracer.occluded_except_cornea(b.refraction.anterior_point, center)) {
+        b.status = PathStatus::occluded;
+      }
+    }
+    PupilTruth& pupil = view.pupil;
+    if (pupil.refracted_center_status == PathStatus::ok &&
+        tracer.occluded_except_cornea(pupil.refracted_center_path.anterior_point, center)) {
+      pupil.refracted_center_status = PathStatus::occluded;
+    }
+  }
+}
+
+}  // namespace
+
+RenderResult render(const Scene& scene, int camera_index, const RenderOptions& options) {
+  validate(scene, camera_index, options);
+  const Camera& camera = scene.cameras[camera_index];
+  const Intrinsics& k = camera.intrinsics();
+  const int width = k.width, height = k.height;
+
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+
+  RenderResult result;
+  result.camera = camera_index;
+  result.truth = compute_truth(scene);
+  const RayTracer tracer(scene);
+  apply_visibility(scene, camera_index, tracer, result.truth);
+
+  std::optional<Integrator> integrator;
+  arena.execute([&] { integrator.emplace(scene, camera, tracer, options); });
+
+  result.radiance = ImagePlane(width, height);
+  ImagePlane diffuse_electrons(width, height);
+  ImagePlane depth(width, height), nx(width, height), ny(width, height), nz(width, height);
+  ImagePlane id(width, height);
+  constexpr int kClasses = 5;
+  std::array<ImagePlane, kClasses> coverage;
+  for (ImagePlane& c : coverage) c = ImagePlane(width, height);
+  ImagePlane cornea(width, height);
+
+  const int spp = options.samples_per_pixel;
+  const Point3 center = camera.center();
+  const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
+
+  const PixelRegion region = options.region.value_or(PixelRegion{0, 0, width, height});
+  std::atomic<int> rows_done{0};
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(region.y0, region.y1), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        for (int x = region.x0; x < region.x1; ++x) {
+          const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
+          const double shift_u = uniform01(options.seed, kJitterStream, 2 * pixel);
+          const double shift_v = uniform01(options.seed, kJitterStream, 2 * pixel + 1);
+          Contribution sum;
+          std::array<int, kClasses> counts{};
+          std::array<PrimaryRecord, kClasses> first_of_class{};
+          int cornea_hits = 0;
+          for (int s = 0; s < spp; ++s) {
+            const auto [ou, ov] = subpixel_offset(s, shift_u, shift_v);
+            const UnitVector3 dir = camera.back_project({x - 0.5 + ou, y - 0.5 + ov});
+            PrimaryRecord record;
+            integrator->trace({center, dir}, 0, 1.0, sum, &record);
+            const int c = static_cast<int>(record.pixel_class);
+            if (counts[c]++ == 0) first_of_class[c] = record;
+            cornea_hits += record.through_cornea ? 1 : 0;
+          }
+          // Natural vignetting: irradiance on the sensor falls as cos^4 of
+          // the field angle.
+          const double cos_field = dot(camera.back_project({double(x), double(y)}), axis);
+          const double vignetting = cos_field * cos_field * cos_field * cos_field;
+          result.radiance.at(x, y) = static_cast<float>(sum.radiance / spp);
+          diffuse_electrons.at(x, y) = static_cast<float>(sum.electrons / spp * vignetting);
+
+          const int majority = static_cast<int>(std::max_element(counts.begin(), counts.end()) - counts.begin());
+          const PrimaryRecord& r = first_of_class[majority];
+          id.at(x, y) = static_cast<float>(majority);
+          depth.at(x, y) = r.hit ? static_cast<float>(r.depth_mm) : 0.0f;
+          nx.at(x, y) = static_cast<float>(r.normal.x);
+          ny.at(x, y) = static_cast<float>(r.normal.y);
+          nz.at(x, y) = static_cast<float>(r.normal.z);
+          for (int c = 0; c < kClasses; ++c) coverage[c].at(x, y) = static_cast<float>(counts[c]) / spp;
+          cornea.at(x, y) = static_cast<float>(cornea_hits) / spp;
+        }
+      }
+      if (options.progress) {
+        options.progress(static_cast<double>(rows_done += static_cast<int>(rows.size())) /
+                         (region.y1 - region.y0));
+      }
+    });
+  });
+
+  // Optics: one point spread per image, at the depth of the first eye.
+  double focus_depth = 1.0;
+  if (!scene.eyes.empty()) focus_depth = (camera.camera_from_world() * scene.eyes[0].cornea_center()).z;
+  const PointSpread psf = point_spread(camera, std::max(focus_depth, 1e-3));
+  arena.execute([&] { result.electrons = blur(diffuse_electrons, psf); });
+
+  // Glints: explicit, from the solver, imaged through the same optics.
+  const std::size_t n_lights = scene.illuminators.size();
+  std::vector<ImagePlane> glint_planes(n_lights, ImagePlane(width, height));
+  for (const EyeInCameraTruth& view : result.truth.views) {
+    if (view.camera != camera_index) continue;
+    for (const GlintTruth& g : view.glints) {
+      GlintImage image;
+      image.eye = view.eye;
+      image.illuminator = g.illuminator;
+      image.status = g.status;
+      const Illuminator& light = scene.illuminators[g.illuminator];
+      if (g.status == PathStatus::ok) {
+        image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection);
+        image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm);
+        if (image.electrons > 0 && std::isfinite(image.electrons)) {
+          add_point_image(glint_planes[g.illuminator], g.pixel.u, g.pixel.v, image.electrons, psf,
+                          image.radiometry.source_cov_px2);
+        }
+      }
+      result.glints.push_back(image);
+    }
+  }
+  ImagePlane glint_total(width, height);
+  for (const ImagePlane& p : glint_planes) {
+    for (std::size_t i = 0; i < p.values.size(); ++i) glint_total.values[i] += p.values[i];
+  }
+  for (std::size_t i = 0; i < glint_total.values.size(); ++i) {
+    result.electrons.values[i] += glint_total.values[i];
+  }
+
+  Sensor sensor = camera.sensor();
+  if (!options.noise) sensor.noise = false;
+  arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
+
+  // AOVs. A glint mask is the fraction of a pixel's signal that the glint carries.
+  const auto fraction_of_signal = [&](const ImagePlane& part) {
+    ImagePlane f(width, height);
+    for (std::size_t i = 0; i < f.values.size(); ++i) {
+      const float total = result.electrons.values[i];
+      f.values[i] = total > 0 ? std::clamp(part.values[i] / total, 0.0f, 1.0f) : 0.0f;
+    }
+    return f;
+  };
+  result.aovs.push_back({"depth", std::move(depth)});
+  result.aovs.push_back({"N.x", std::move(nx)});
+  result.aovs.push_back({"N.y", std::move(ny)});
+  result.aovs.push_back({"N.z", std::move(nz)});
+  result.aovs.push_back({"id", std::move(id)});
+  result.aovs.push_back({"skin", std::move(coverage[1])});
+  result.aovs.push_back({"sclera", std::move(coverage[2])});
+  result.aovs.push_back({"iris", std::move(coverage[3])});
+  result.aovs.push_back({"pupil", std::move(coverage[4])});
+  result.aovs.push_back({"cornea", std::move(cornea)});
+  result.aovs.push_back({"glint", fraction_of_signal(glint_total)});
+  if (options.per_light_glint_masks) {
+    for (std::size_t l = 0; l < n_lights; ++l) {
+      result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l])});
+    }
+  }
+  return result;
+}
+
+}  // namespace purkinje::renderer

@@ -1,0 +1,170 @@
+#include "surfaces.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace purkinje::renderer::surfaces {
+
+int solve_quadratic(double a, double half_b, double c, double roots[2]) {
+  if (a == 0.0) {
+    if (half_b == 0.0) return 0;
+    roots[0] = -c / (2.0 * half_b);
+    return 1;
+  }
+  const double disc = half_b * half_b - a * c;
+  if (!(disc >= 0.0)) return 0;
+  // q has the sign of -half_b, so neither root subtracts nearly equal numbers.
+  const double q = -(half_b + std::copysign(std::sqrt(disc), half_b));
+  if (q == 0.0) {  // half_b = disc = 0, hence c = 0: a double root at 0
+    roots[0] = 0.0;
+    return 1;
+  }
+  const double r0 = q / a, r1 = c / q;
+  roots[0] = std::min(r0, r1);
+  roots[1] = std::max(r0, r1);
+  return 2;
+}
+
+namespace {
+
+// The first root inside the segment whose point passes `keep`.
+template <class Keep>
+bool first_kept_root(const Segment& s, double a, double half_b, double c, Keep keep, double& t) {
+  double roots[2];
+  const int n = solve_quadratic(a, half_b, c, roots);
+  for (int i = 0; i < n; ++i) {
+    const double r = roots[i];
+    if (r > s.t_lo && r < s.t_hi && keep(s.origin + s.direction * r)) {
+      t = r;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+bool ConicoidCap::first_hit(const Segment& s, double& t) const {
+  const Vector3& d = s.direction;
+  const Point3& o = s.origin;
+  const double w0 = apex_z_mm - o.z;
+  const double a = d.x * d.x + d.y * d.y + k * d.z * d.z;
+  const double half_b = o.x * d.x + o.y * d.y - d.z * (k * w0 - radius_mm);
+  const double c = o.x * o.x + o.y * o.y + w0 * (k * w0 - 2.0 * radius_mm);
+  // w >= 0 drops the far sheet of a hyperboloid (k < 0); for k > 0 the
+  // surface has no points with w < 0, so only rounding is tested there.
+  const double lo = -kSeamOverlapMm, hi = max_depth_mm + kSeamOverlapMm;
+  return first_kept_root(
+      s, a, half_b, c,
+      [&](const Point3& p) {
+        const double w = apex_z_mm - p.z;
+        return w >= lo && w <= hi;
+      },
+      t);
+}
+
+Vector3 ConicoidCap::normal(const Point3& p) const {
+  return {p.x, p.y, radius_mm - k * (apex_z_mm - p.z)};
+}
+
+Box ConicoidCap::bounds() const {
+  // r^2(w) = 2 R w - k w^2 grows with w up to the equator w = R / k of an
+  // ellipsoid (k > 0) and without bound otherwise.
+  double w_widest = max_depth_mm;
+  if (k > 0.0) w_widest = std::min(w_widest, radius_mm / k);
+  const double r = std::sqrt(std::max(0.0, 2.0 * radius_mm * w_widest - k * w_widest * w_widest));
+  return {{-r, -r, apex_z_mm - max_depth_mm}, {r, r, apex_z_mm}};
+}
+
+bool SphereBelowPlane::first_hit(const Segment& s, double& t) const {
+  const Vector3 oc = s.origin - center;
+  const double a = s.direction.squared_norm();
+  const double half_b = dot(oc, s.direction);
+  const double c = oc.squared_norm() - radius_mm * radius_mm;
+  const double top = max_z_mm + kSeamOverlapMm;
+  return first_kept_root(s, a, half_b, c, [&](const Point3& p) { return p.z <= top; }, t);
+}
+
+Vector3 SphereBelowPlane::normal(const Point3& p) const { return p - center; }
+
+Box SphereBelowPlane::bounds() const {
+  const double r = radius_mm;
+  return {{center.x - r, center.y - r, center.z - r},
+          {center.x + r, center.y + r, std::min(center.z + r, max_z_mm + kSeamOverlapMm)}};
+}
+
+bool Cylinder::first_hit(const Segment& s, double& t) const {
+  const Vector3& d = s.direction;
+  const Point3& o = s.origin;
+  const double a = d.x * d.x + d.y * d.y;
+  if (a == 0.0) return false;  // parallel to the wall
+  const double half_b = o.x * d.x + o.y * d.y;
+  const double c = o.x * o.x + o.y * o.y - radius_mm * radius_mm;
+  const double lo = min_z_mm - kSeamOverlapMm, hi = max_z_mm + kSeamOverlapMm;
+  return first_kept_root(s, a, half_b, c, [&](const Point3& p) { return p.z >= lo && p.z <= hi; },
+                         t);
+}
+
+Vector3 Cylinder::normal(const Point3& p) const { return {p.x, p.y, 0.0}; }
+
+Box Cylinder::bounds() const {
+  const double r = radius_mm;
+  return {{-r, -r, min_z_mm}, {r, r, max_z_mm}};
+}
+
+bool PlaneRegion::contains(double x, double y) const {
+  const double ox = x - outer_x_mm, oy = y - outer_y_mm;
+  const double outer = outer_radius_mm + kSeamOverlapMm;
+  if (ox * ox + oy * oy > outer * outer) return false;
+  if (hole_radius_mm > kSeamOverlapMm) {
+    const double hx = x - hole_x_mm, hy = y - hole_y_mm;
+    const double hole = hole_radius_mm - kSeamOverlapMm;
+    if (hx * hx + hy * hy < hole * hole) return false;
+  }
+  for (const Cut& cut : cuts) {
+    if (cut.normal.x * x + cut.normal.y * y + cut.normal.z * z_mm > cut.offset) return false;
+  }
+  return true;
+}
+
+bool PlaneRegion::first_hit(const Segment& s, double& t) const {
+  if (s.direction.z == 0.0) return false;  // in or parallel to the plane
+  const double r = (z_mm - s.origin.z) / s.direction.z;
+  if (!(r > s.t_lo && r < s.t_hi)) return false;
+  if (!contains(s.origin.x + r * s.direction.x, s.origin.y + r * s.direction.y)) return false;
+  t = r;
+  return true;
+}
+
+Box PlaneRegion::bounds() const {
+  const double r = outer_radius_mm;
+  return {{outer_x_mm - r, outer_y_mm - r, z_mm}, {outer_x_mm + r, outer_y_mm + r, z_mm}};
+}
+
+bool PalpebralOpening::contains(const Point3& p) const {
+  if (!(p.z > 0.0) || !(std::abs(p.x) < half_width_mm)) return false;
+  const double u = p.x / half_width_mm;
+  const double f = opening * (1.0 - u * u);
+  const double upper = closing_line_mm + (upper_margin_mm - closing_line_mm) * f;
+  const double lower = closing_line_mm + (lower_margin_mm - closing_line_mm) * f;
+  return p.y > lower && p.y < upper;
+}
+
+bool EyelidSphere::first_hit(const Segment& s, double& t) const {
+  const Vector3 o = s.origin.from_origin();
+  const double a = s.direction.squared_norm();
+  const double half_b = dot(o, s.direction);
+  const double c = o.squared_norm() - radius_mm * radius_mm;
+  const double bottom = min_z_mm - kSeamOverlapMm, top = max_z_mm + kSeamOverlapMm;
+  return first_kept_root(
+      s, a, half_b, c,
+      [&](const Point3& p) { return p.z >= bottom && p.z <= top && !opening.contains(p); }, t);
+}
+
+Box EyelidSphere::bounds() const {
+  const double r = radius_mm;
+  return {{-r, -r, std::max(-r, min_z_mm - kSeamOverlapMm)},
+          {r, r, std::min(r, max_z_mm + kSeamOverlapMm)}};
+}
+
+}  // namespace purkinje::renderer::surfaces

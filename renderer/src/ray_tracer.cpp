@@ -514,7 +514,7 @@ struct RayTracer::Impl {
                                                     : error_message));
   }
 
-  // Runs the query on `lane`; false when the ray misses the scene's bounds.
+  // Runs the query on `lane`, whose `surface` is left null when nothing is hit.
   template <bool kOcclusion>
   void run(Lane& lane, bool skip_cornea) const {
     double t0 = lane.t_lo, t1 = lane.t_hi;

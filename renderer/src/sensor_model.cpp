@@ -163,16 +163,25 @@ class PixelRandom {
   std::uint64_t state_;
 };
 
+// 1 / k, so that the Poisson inversion multiplies instead of divides.
+constexpr std::array<double, 64> kInverse = [] {
+  std::array<double, 64> t{};
+  for (std::size_t i = 1; i < t.size(); ++i) t[i] = 1.0 / static_cast<double>(i);
+  return t;
+}();
+
+// log(k!) for k < 32.
+const std::array<double, 32> kLogFactorial = [] {
+  std::array<double, 32> t{};
+  for (std::size_t i = 1; i < t.size(); ++i) t[i] = t[i - 1] + std::log(static_cast<double>(i));
+  return t;
+}();
+
 // log(k!) without std::lgamma, which writes the global signgam (a data race
 // under TBB).
 double log_factorial(double k) {
-  static const std::array<double, 32> table = [] {
-    std::array<double, 32> t{};
-    for (std::size_t i = 1; i < t.size(); ++i) t[i] = t[i - 1] + std::log(static_cast<double>(i));
-    return t;
-  }();
-  if (k < static_cast<double>(table.size())) return table[static_cast<std::size_t>(k)];
-  // Stirling's series for log Gamma(x), x = k + 1 >= 33: next term < 1e-17.
+  if (k < static_cast<double>(kLogFactorial.size())) return kLogFactorial[static_cast<std::size_t>(k)];
+  // Stirling's series for log Gamma(x), x = k + 1 >= 33: next term ~2e-17.
   const double x = k + 1, ix = 1 / x, ix2 = ix * ix;
   return (x - 0.5) * std::log(x) - x + 0.5 * std::log(2 * std::numbers::pi) +
          ix * (1.0 / 12 - ix2 * (1.0 / 360 - ix2 * (1.0 / 1260 - ix2 / 1680)));
@@ -196,20 +205,14 @@ double floor_of(double x) {
 double poisson(double mean, PixelRandom& rng) {
   if (mean <= 0) return 0;
   if (mean < kPoissonInversionLimit) {
-    // 1 / k, so the search multiplies instead of divides.
-    static const std::array<double, 64> inverse = [] {
-      std::array<double, 64> t{};
-      for (std::size_t i = 1; i < t.size(); ++i) t[i] = 1.0 / static_cast<double>(i);
-      return t;
-    }();
     const double u = rng.uniform();
     double p = std::exp(-mean), cdf = p;
     std::size_t k = 0;
     // The cap only guards against a cdf that rounds below u; at mean < 10
     // the probability beyond 63 is below 1e-30.
-    while (u > cdf && k + 1 < inverse.size()) {
+    while (u > cdf && k + 1 < kInverse.size()) {
       ++k;
-      p *= mean * inverse[k];
+      p *= mean * kInverse[k];
       cdf += p;
     }
     return static_cast<double>(k);
@@ -227,7 +230,10 @@ double poisson(double mean, PixelRandom& rng) {
     const double u = rng.uniform() - 0.5;
     const double v = rng.uniform();
     const double us = 0.5 - std::abs(u);
-    const double k = floor_of((2 * a / us + b) * u + mean + 0.43);
+    // us can reach 0 (u = -0.5) and send this to -inf; negative k are
+    // rejected and huge ones fail the final test, so clamping changes no
+    // outcome but keeps the conversion defined.
+    const double k = floor_of(std::clamp((2 * a / us + b) * u + mean + 0.43, -1.0, 0x1p62));
     if (us >= 0.07 && v <= vr) [[likely]] {
       return k;
     }

@@ -1,6 +1,7 @@
 #include "purkinje/renderer/sensor_model.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
@@ -583,6 +584,18 @@ TEST(Expose, SameSeedSameImageOtherSeedOtherImage) {
   std::copy(e.values.begin(), e.values.begin() + head.values.size(), head.values.begin());
   const SensorImage h = expose(head, s, 1234);
   EXPECT_TRUE(std::equal(h.values.begin(), h.values.end(), a.values.begin()));
+}
+
+TEST(Expose, ResultsDoNotDependOnTheThreadCount) {
+  ImagePlane e(97, 61);
+  for (std::size_t i = 0; i < e.values.size(); ++i) e.values[i] = static_cast<float>((i * 37) % 5000) * 0.9f;
+  Sensor s;
+  s.bits = 16;
+  const SensorImage parallel = expose(e, s, 77);
+  const ImagePlane blurred = blur(e, {0.8, 2.5});
+  const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+  EXPECT_EQ(expose(e, s, 77).values, parallel.values);
+  EXPECT_EQ(blur(e, {0.8, 2.5}).values, blurred.values);
 }
 
 TEST(Expose, FarBeyondFullWellSaturatesEvenWithNoise) {

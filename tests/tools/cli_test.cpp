@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -177,7 +178,7 @@ TEST_F(Cli, WritesJsonToStandardOutputWithoutOutputOption) {
 }
 
 TEST_F(Cli, HelpExitsZeroForTheProgramAndEverySubcommand) {
-  for (const char* arguments : {"--help", "truth --help"}) {
+  for (const char* arguments : {"--help", "truth --help", "render --help"}) {
     EXPECT_EQ(run(arguments), 0) << arguments;
     EXPECT_NE(out().find("Usage"), std::string::npos) << arguments << ": " << out();
     EXPECT_NE(out().find("Exit codes"), std::string::npos) << arguments << ": " << out();
@@ -193,7 +194,9 @@ TEST_F(Cli, UsageErrorsExitTwo) {
   const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
   EXPECT_EQ(run(""), 2) << "no subcommand";
   EXPECT_EQ(run("truth"), 2) << "no scene";
-  EXPECT_EQ(run("render " + scene), 2) << "unknown subcommand";
+  EXPECT_EQ(run("render " + scene), 2) << "render without an output folder";
+  EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --samples 0"), 2);
+  EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --mode magic"), 2);
   EXPECT_EQ(run("truth " + scene + " --format xml"), 2);
   EXPECT_EQ(run("truth " + scene + " --pupil-points -3"), 2);
   EXPECT_EQ(run("truth " + scene + " --no-such-option"), 2);
@@ -224,6 +227,62 @@ TEST_F(Cli, UnwritableOutputExitsThreeAndLeavesNothing) {
   fs::create_directory(output_dir_ / "taken.json");  // a directory where the file should go
   EXPECT_EQ(run("truth " + scene + " -o " + quoted((output_dir_ / "taken.json").string())), 3);
   EXPECT_EQ(output_dir_entries(), std::vector<std::string>{"taken.json"});
+}
+
+// ------------------------------------------------------------- render
+
+// A headset render at one sample per pixel takes about a second in Debug.
+std::string render_arguments(const fs::path& output) {
+  return "render " + quoted((kSourceDir / "assets/scenes/headset.json").string()) + " -o " +
+         quoted(output.string()) + " --samples 1";
+}
+
+TEST_F(Cli, RenderWritesTheImageItsAovsAndLabels) {
+  ASSERT_EQ(run(render_arguments(output_dir_) + " --seed 3"), 0) << err();
+  const std::vector<std::string> expected{"headset_eye_cam.exr", "headset_eye_cam.json", "headset_eye_cam.png"};
+  std::vector<std::string> names = output_dir_entries();
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, expected);
+  EXPECT_NE(out().find("headset_eye_cam.png"), std::string::npos) << out();
+  // A PNG file starts with its 8-byte signature.
+  EXPECT_EQ(read(output_dir_ / "headset_eye_cam.png").substr(0, 8), std::string("\x89PNG\r\n\x1a\n"));
+  const std::string text = read(output_dir_ / "headset_eye_cam.json");
+  EXPECT_FALSE(mentions_non_finite(text));
+  const json labels = json::parse(text);
+  EXPECT_EQ(labels["render"]["files"]["image"], "headset_eye_cam.png");
+  EXPECT_EQ(labels["render"]["seed"], 3);
+  EXPECT_EQ(labels["render"]["samples_per_pixel"], 1);
+  EXPECT_EQ(labels["render"]["glints"].size(), 8u);
+}
+
+TEST_F(Cli, RenderOfABadSceneExitsOneAndWritesNothing) {
+  const fs::path bad = kSourceDir / "tests/data/malformed/sensor_bits_unsupported.json";
+  EXPECT_EQ(run("render " + quoted(bad.string()) + " -o " + quoted(output_dir_.string())), 1);
+  EXPECT_NE(err().find(bad.string()), std::string::npos) << err();
+  EXPECT_TRUE(output_dir_entries().empty());
+  EXPECT_EQ(run(render_arguments(output_dir_) + " --camera no_such_camera"), 1);
+  EXPECT_NE(err().find("no_such_camera"), std::string::npos) << err();
+}
+
+TEST_F(Cli, RenderIntoAnUnwritableFolderExitsThree) {
+  std::ofstream(output_dir_ / "a_file") << "not a folder";
+  EXPECT_EQ(run(render_arguments(output_dir_ / "a_file" / "images")), 3);
+  EXPECT_NE(err().find("a_file"), std::string::npos) << err();
+  EXPECT_EQ(output_dir_entries(), std::vector<std::string>{"a_file"});
+}
+
+// A full disk, simulated by a file-size limit of 32 kB (ulimit -f counts
+// 512-byte blocks) with SIGXFSZ ignored, so writes fail with EFBIG.
+TEST_F(Cli, RenderOntoAFullDiskExitsThreeAndLeavesNoFile) {
+  const std::string command = "bash -c " +
+                              quoted("trap '' XFSZ; ulimit -f 64; exec " + quoted(kExecutable.string()) +
+                                     " " + render_arguments(output_dir_)) +
+                              " >/dev/null 2>" + quoted((root_ / "stderr.txt").string());
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << err();
+  EXPECT_EQ(WEXITSTATUS(status), 3) << err();
+  EXPECT_NE(err().find("File too large"), std::string::npos) << err();
+  EXPECT_TRUE(output_dir_entries().empty());
 }
 
 }  // namespace

@@ -11,7 +11,9 @@
 // centre of rotation, outside the limbus, with a short limbal band closing
 // the gap to the cornea's edge) and, when the eye has eyelids, the lids
 // (a sphere about the centre of rotation, minus the palpebral opening) and
-// the skin around them (a plane facing forward with a hole for the lids).
+// the skin around them (a plane facing forward with a hole for the lids,
+// and the rest of the lid sphere behind it as the eye's socket).
+// Geometry and precision are documented in src/ray_tracer.cpp.
 
 #include <limits>
 #include <memory>
@@ -50,14 +52,20 @@ struct Hit {
 
 class RayTracer {
  public:
-  explicit RayTracer(const Scene& scene);  // throws std::runtime_error on an Embree error
+  // Throws std::runtime_error on an Embree error, std::invalid_argument
+  // (naming eyes[i]) for an eye whose surfaces cannot be built or sealed.
+  explicit RayTracer(const Scene& scene);
   ~RayTracer();
   RayTracer(const RayTracer&) = delete;
   RayTracer& operator=(const RayTracer&) = delete;
 
+  // The closest hit with t_min < t < t_max. Throws std::invalid_argument
+  // for a non-finite origin or t_min < 0; an empty interval hits nothing.
   Hit intersect(const Ray& ray) const;
-  // Whether any surface lies on the open segment between two points. The
-  // cornea counts: light does not pass it without refracting.
+  // Whether any surface lies on the open segment between two points (both
+  // ends trimmed by 1e-6 of the length + 1e-9 mm, so a segment may start or
+  // end on a surface). The cornea counts: light does not pass it without
+  // refracting. Throws std::invalid_argument for non-finite points.
   bool occluded(const Point3& from, const Point3& to) const;
   // As occluded(), ignoring the anterior and posterior cornea (for a path
   // whose refraction the caller handles, e.g. from a light to the cornea).

@@ -14,17 +14,19 @@
 // would cost nothing but are biased by the grid's spacing (second order,
 // ~1e-3 at 33 nodes) and one-sided at the lit region's border.
 //
-// What is interpolated: E = S c T(c), T(c) the anterior transmittance. Both
-// T and dOmega/dA vanish like c at the light's horizon on the cornea, so E
-// has no simple form there, but c falls linearly through 0 and S (the
-// spread) stays smooth. The forward map parametrized by the corneal point
-// continues smoothly past every end of the physical paths: beyond the
-// limbus, beyond the horizon (c < 0, the ray refracted as if c were
-// positive) and beyond the posterior cornea's rim in the iris plane. The
-// nodes just beyond the paths get those continuations (Newton on the
-// forward map from a neighbour), so the cubic interpolation sees smooth
-// data up to the edges, and the edges are cut where the interpolated c or
-// lit margin (limbus, inside of the cornea) crosses zero.
+// What is interpolated: E = S c T(c), with c the cosine of incidence and
+// T(c) the anterior transmittance. Both T and dOmega/dA vanish like c at
+// the light's horizon on the cornea, so E has no simple form there; but the
+// spread S and the chart point (u, v) of the anterior crossing (its
+// eye-frame x and y) vary smoothly everywhere. The cache interpolates S and
+// (u, v) (Catmull-Rom) and computes c and whether the crossing lies inside
+// the limbus exactly from (u, v): the shadow edges at the limbus and at the
+// horizon fall where they should inside a cell, not smeared over one.
+// For that the forward map continues smoothly past every end of the
+// physical paths: beyond the limbus, beyond the horizon (c < 0, the ray
+// refracted as if c were positive) and beyond the posterior cornea's rim
+// in the iris plane. Nodes just beyond the paths get those continuations
+// (Newton on the forward map from a neighbour), else extrapolations.
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -235,7 +237,7 @@ struct Sample {
   bool hidden = false;     // from the light by the caller's visibility test
   double irradiance = 0;   // W/m^2 (paths)
   double spread = 0;       // S = E / (c T(c)), W/m^2
-  double cos_incidence = -1;  // c, at the anterior cornea
+  double u = 0, v = 0;     // chart point of the anterior crossing (see TracedRay)
   double cap_margin = -1;  // mm inside the limbus where the path crosses the cornea
   Differential path;
   bool known() const { return has_path || extrapolated; }
@@ -254,7 +256,8 @@ bool set_irradiance(const EyeOptics& optics, const Differential& d, double inten
   s.has_path = true;
   s.irradiance = e;
   s.spread = spread;
-  s.cos_incidence = c;
+  s.u = r.u;
+  s.v = r.v;
   s.cap_margin = optics.limbus_depth - (optics.front.apex_z - r.anterior.z);
   s.path = d;
   return true;
@@ -301,8 +304,9 @@ void cubic_weights(double t, double w[4]) {
 }
 
 // Rings of nodes beyond the paths that get values: the cubic's stencil
-// reaches two nodes out of a cell.
-constexpr int kFilledRings = 2;
+// reaches two nodes out of a cell, whose corners may be a ring out already
+// where the lit region pokes between nodes.
+constexpr int kFilledRings = 3;
 
 }  // namespace
 
@@ -328,6 +332,12 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
   half_size_mm_ = iris_outer_radius(m);
   const int n = resolution;
   const std::size_t count = static_cast<std::size_t>(n) * n;
+  light_mm_ = eye_from_world_ * light_position;
+  apex_z_mm_ = optics.front.apex_z;
+  anterior_radius_mm_ = optics.front.radius;
+  anterior_one_plus_q_ = optics.front.one_plus_q;
+  limbus_depth_mm_ = optics.limbus_depth;
+  inside_radius_mm_ = optics.inside_radius;
   anterior_inner_index_ = optics.n_front;
   nodes_.assign(count, GridNode{});
   if (radiant_intensity_w_sr == 0) return;
@@ -366,8 +376,7 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
   // Values for the nodes just beyond the paths, ring by ring, each ring
   // from the previous state only (so the order, and the thread count, do
   // not matter): the paths' continuation where it exists, else a linear
-  // extrapolation from the known nodes around (c then crosses zero about
-  // where the light's horizon is). Beside hidden nodes only, a node is
+  // extrapolation from the known nodes around. Beside hidden nodes only, a node is
   // hidden too: the light's path to it would pass the same obstacle.
   for (int ring = 0; ring < kFilledRings; ++ring) {
     std::vector<int> frontier;
@@ -390,9 +399,9 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
       for (std::size_t f = range.begin(); f != range.end(); ++f) {
         const int i = frontier[f] % n, j = frontier[f] / n;
         Sample& out = filled[f];
-        Sample line, near;  // sums of extrapolations and of neighbours
-        line.spread = line.cos_incidence = line.cap_margin = 0;
-        near.spread = near.cos_incidence = near.cap_margin = 0;
+        // Sums of (spread, u, v): linear extrapolations along the eight
+        // directions, and the known neighbours themselves.
+        double line[3] = {0, 0, 0}, near[3] = {0, 0, 0};
         int lines = 0, nears = 0;
         bool all_hidden = true;
         for (int dj = -1; dj <= 1; ++dj) {
@@ -408,27 +417,27 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
                 set_irradiance(optics, d, radiant_intensity_w_sr, out);
               }
             }
-            near.spread += a.spread;
-            near.cos_incidence += a.cos_incidence;
-            near.cap_margin += a.cap_margin;
+            near[0] += a.spread;
+            near[1] += a.u;
+            near[2] += a.v;
             ++nears;
             if (i2 < 0 || i2 >= n || j2 < 0 || j2 >= n) continue;
             const Sample& b = samples[index(i2, j2)];
             if (!b.known()) continue;
-            line.spread += 2 * a.spread - b.spread;
-            line.cos_incidence += 2 * a.cos_incidence - b.cos_incidence;
-            line.cap_margin += 2 * a.cap_margin - b.cap_margin;
+            line[0] += 2 * a.spread - b.spread;
+            line[1] += 2 * a.u - b.u;
+            line[2] += 2 * a.v - b.v;
             ++lines;
           }
         }
         if (out.has_path) continue;
-        const Sample& sum = lines > 0 ? line : near;
+        const double* sum = lines > 0 ? line : near;
         const double k = 1.0 / (lines > 0 ? lines : nears);
         out.extrapolated = true;
         out.hidden = all_hidden;
-        out.spread = all_hidden ? 0.0 : sum.spread * k;
-        out.cos_incidence = sum.cos_incidence * k;
-        out.cap_margin = sum.cap_margin * k;
+        out.spread = all_hidden ? 0.0 : sum[0] * k;
+        out.u = sum[1] * k;
+        out.v = sum[2] * k;
       }
     });
     for (std::size_t f = 0; f < frontier.size(); ++f) samples[frontier[f]] = filled[f];
@@ -438,10 +447,7 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
     for (int i = 0; i < n; ++i) {
       const Sample& s = samples[index(i, j)];
       if (!s.known()) continue;
-      // Lit: crossing the cornea inside the limbus, from inside the cornea.
-      nodes_[index(i, j)] = {s.spread, s.cos_incidence,
-                             std::min(s.cap_margin, optics.inside_radius -
-                                                        std::hypot(coordinate(i), coordinate(j)))};
+      nodes_[index(i, j)] = {s.spread, s.u, s.v, true};
     }
   }
 }
@@ -452,34 +458,41 @@ double IrisIrradianceCache::irradiance_w_m2(const Point3& iris_plane_point) cons
   const double gx = (p.x + half_size_mm_) * scale, gy = (p.y + half_size_mm_) * scale;
   const double last = resolution_ - 1;
   if (!(gx >= 0 && gx <= last && gy >= 0 && gy <= last)) return 0;  // also rejects NaN
+  // Light reaches only the part of the plane inside the cornea.
+  if (!(p.x * p.x + p.y * p.y < inside_radius_mm_ * inside_radius_mm_) || !(inside_radius_mm_ > 0)) {
+    return 0;
+  }
   const int i = std::min(static_cast<int>(gx), resolution_ - 2);
   const int j = std::min(static_cast<int>(gy), resolution_ - 2);
-  const double fx = gx - i, fy = gy - j;
-  const std::size_t k00 = static_cast<std::size_t>(j) * resolution_ + i;
-  const std::size_t k01 = k00 + resolution_;
-  const double margin =
-      (1 - fy) * ((1 - fx) * nodes_[k00].lit_margin_mm + fx * nodes_[k00 + 1].lit_margin_mm) +
-      fy * ((1 - fx) * nodes_[k01].lit_margin_mm + fx * nodes_[k01 + 1].lit_margin_mm);
-  if (!(margin > 0)) return 0;
-  // Cubic in the smooth quantities: a cell's corners alone miss their
-  // curvature where light arrives obliquely.
   double wx[4], wy[4];
-  cubic_weights(fx, wx);
-  cubic_weights(fy, wy);
-  double spread = 0, c = 0;
+  cubic_weights(gx - i, wx);
+  cubic_weights(gy - j, wy);
+  double spread = 0, u = 0, v = 0;
   for (int b = 0; b < 4; ++b) {
     const std::size_t row = static_cast<std::size_t>(std::clamp(j - 1 + b, 0, resolution_ - 1));
-    double spread_row = 0, c_row = 0;
+    double spread_row = 0, u_row = 0, v_row = 0;
     for (int a = 0; a < 4; ++a) {
       const GridNode& node = nodes_[row * resolution_ + std::clamp(i - 1 + a, 0, resolution_ - 1)];
+      if (!node.known) return 0;  // two cells or more beyond the lit region
       spread_row += wx[a] * node.spread_w_m2;
-      c_row += wx[a] * node.cos_incidence;
+      u_row += wx[a] * node.chart_u_mm;
+      v_row += wx[a] * node.chart_v_mm;
     }
     spread += wy[b] * spread_row;
-    c += wy[b] * c_row;
+    u += wy[b] * u_row;
+    v += wy[b] * v_row;
   }
-  if (!(c > 0) || !(spread > 0)) return 0;
-  c = std::min(c, 1.0);
+  if (!(spread > 0)) return 0;
+  // The anterior crossing, exactly where the interpolated chart point says.
+  const double r2 = u * u + v * v, R = anterior_radius_mm_, k = anterior_one_plus_q_;
+  const double disc = R * R - k * r2;
+  if (!(disc > 0)) return 0;
+  const double w = r2 / (R + std::sqrt(disc));  // depth below the apex
+  if (!(w < limbus_depth_mm_)) return 0;
+  const Vector3 normal{u, v, R - k * w};
+  const Vector3 from_light = Point3{u, v, apex_z_mm_ - w} - light_mm_;
+  const double c = -dot(from_light, normal) / (from_light.norm() * normal.norm());
+  if (!(c > 0)) return 0;
   return spread * c * (1.0 - fresnel_reflectance(c, 1.0, anterior_inner_index_));
 }
 
@@ -538,13 +551,15 @@ double turn_of(double x, double y) {
   if (ay > ax) a = 0.5 * std::numbers::pi - a;
   if (x < 0) a = std::numbers::pi - a;
   if (y < 0) a = 2 * std::numbers::pi - a;
-  const double turn = a / kTwoPi;
+  const double turn = a * (1.0 / kTwoPi);
   return turn < 1.0 ? turn : 0.0;
 }
 
 double smooth(double t) { return t * t * (3.0 - 2.0 * t); }
 
-double smoothstep(double a, double b, double x) { return smooth(std::clamp((x - a) / (b - a), 0.0, 1.0)); }
+// floor() for the texture's coordinates, all >= 0: a truncation, where
+// std::floor is a library call on baseline x86-64.
+double floor_of_nonnegative(double s) { return static_cast<double>(static_cast<std::int64_t>(s)); }
 
 // Index of a cell at [0, periods] (turns times periods), wrapped to
 // [0, periods) without an integer division.
@@ -557,7 +572,7 @@ std::int64_t wrapped(double cell, int periods) {
 // periodic) and one cell per unit of v.
 double value_noise(const Lattice& lattice, double u, int periods, double v) {
   const double su = u * periods;
-  const double cu = std::floor(su), cv = std::floor(v);
+  const double cu = floor_of_nonnegative(su), cv = floor_of_nonnegative(v);
   const double fu = smooth(su - cu), fv = smooth(v - cv);
   const std::int64_t i0 = wrapped(cu, periods), i1 = i0 + 1 == periods ? 0 : i0 + 1;
   const auto j0 = static_cast<std::int64_t>(cv);
@@ -570,7 +585,7 @@ double value_noise(const Lattice& lattice, double u, int periods, double v) {
 // The same along u only.
 double value_noise(const Lattice& lattice, double u, int periods) {
   const double su = u * periods;
-  const double cu = std::floor(su);
+  const double cu = floor_of_nonnegative(su);
   const double fu = smooth(su - cu);
   const std::int64_t i0 = wrapped(cu, periods), i1 = i0 + 1 == periods ? 0 : i0 + 1;
   const double a0 = lattice.value(i0, 0), a1 = lattice.value(i1, 0);
@@ -603,7 +618,7 @@ double crypt_in_cell(const Lattice& lattice, std::int64_t column, std::int64_t r
 
 double crypt_darkening(const Lattice& lattice, double turn, double rho) {
   const double su = turn * kCryptCells, sv = rho * kCryptRows;
-  const double cu = std::floor(su), cv = std::floor(sv);
+  const double cu = floor_of_nonnegative(su), cv = floor_of_nonnegative(sv);
   const std::int64_t column = wrapped(cu, kCryptCells);
   const auto row = static_cast<std::int64_t>(cv);
   const std::int64_t other = sv - cv < 0.5 ? row - 1 : row + 1;
@@ -645,8 +660,9 @@ double iris_albedo(const EyeModel& model, const EyeAppearance& appearance, doubl
   const double from_centre = std::sqrt(dx * dx + dy * dy);
   double ux = 1, uy = 0;
   if (from_centre > 0) {
-    ux = dx / from_centre;
-    uy = dy / from_centre;
+    const double inverse = 1.0 / from_centre;
+    ux = dx * inverse;
+    uy = dy * inverse;
   }
   // Distance from the pupil centre to the iris border along (ux, uy).
   const double along = cx * ux + cy * uy;
@@ -660,15 +676,16 @@ double iris_albedo(const EyeModel& model, const EyeAppearance& appearance, doubl
   // Radial fibres: noise of high angular and low radial frequency, with a
   // slow angular waviness so that the fibres are not straight spokes.
   turn += 0.002 * value_noise(Lattice(seed, kWaviness), turn, 24, rho * 3.0);
-  turn -= std::floor(turn);
+  if (turn < 0) turn += 1;
+  if (turn >= 1) turn -= 1;
   const double fibres = 0.65 * value_noise(Lattice(seed, kFibres), turn, 180, rho * 3.0) +
                         0.35 * value_noise(Lattice(seed, kFineFibres), turn, 450, rho * 7.0);
   // Collarette: a zigzag ring about a third of the way out.
   const double collarette_rho = 0.33 + 0.04 * value_noise(Lattice(seed, kCollarette), turn, 22);
-  const double t = (rho - collarette_rho) / 0.06;
+  const double t = (rho - collarette_rho) * (1.0 / 0.06);
   const double collarette = std::abs(t) < 1 ? (1 - t * t) * (1 - t * t) : 0.0;
-  const double ruff = 1.0 - smoothstep(0.0, 0.06, rho);
-  const double limbal = smoothstep(0.82, 1.0, rho);
+  const double ruff = 1.0 - smooth(std::min(rho * (1.0 / 0.06), 1.0));
+  const double limbal = smooth(std::max(0.0, (rho - 0.82) * (1.0 / 0.18)));
 
   const double texture = kFibreAmplitude * fibres -
                          kCryptAmplitude * crypt_darkening(Lattice(seed, kCrypts), turn, rho) -

@@ -44,6 +44,10 @@ constexpr int kMaxSpecularDepth = 6;
 // pixel noticeably.
 constexpr double kMinBranchWeight = 1e-4;
 
+// Angular half-width (1/e) of the fundus's retro-reflection lobe: bright
+// pupil needs a light within a few degrees of the camera as seen from the eye.
+constexpr double kFundusLobeRad = 1.5 * std::numbers::pi / 180;
+
 // Random-number streams (see uniform01): one per purpose.
 enum Stream : std::uint64_t { kJitterStream = 1, kSensorStream = 2 };
 
@@ -129,8 +133,8 @@ class Integrator {
         return;
       }
       case Surface::pupil:
-        // Dark pupil: the fundus returns (almost) nothing toward the camera.
         if (record) record->pixel_class = PixelClass::pupil;
+        bright_pupil(hit, weight, out);
         return;
       case Surface::cornea_anterior:
       case Surface::cornea_posterior:
@@ -164,6 +168,31 @@ class Integrator {
     for (std::size_t k = 0; k < lights_.size(); ++k) {
       const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
       const double radiance = weight * albedo * kInvPi * e;
+      out.radiance += radiance;
+      out.electrons += radiance * lights_[k].electrons_per_radiance;
+    }
+  }
+
+  // Retro-reflection from the fundus: of the light entering the pupil, a
+  // fraction fundus_reflectance returns through it into a narrow Gaussian
+  // lobe about the direction back to its source. Seen at an angle alpha
+  // from that direction, a pupil point under irradiance E has radiance
+  // rho E exp(-(alpha/alpha0)^2) / (pi alpha0^2), the lobe's solid angle
+  // being pi alpha0^2. Far from the camera's axis (alpha >> alpha0) the
+  // pupil stays dark.
+  void bright_pupil(const Hit& hit, double weight, Contribution& out) const {
+    const Eye& eye = scene_.eyes[hit.eye];
+    const double rho = eye.appearance().fundus_reflectance;
+    if (!(rho > 0)) return;
+    const Point3 c = eye.cornea_center();
+    const Vector3 to_camera = camera_.center() - c;
+    for (std::size_t k = 0; k < lights_.size(); ++k) {
+      const double alpha = angle_between(lights_[k].position - c, to_camera);
+      const double x = alpha / kFundusLobeRad;
+      if (x > 6) continue;  // exp(-36): nothing
+      const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
+      const double radiance =
+          weight * rho * e * std::exp(-x * x) / (std::numbers::pi * kFundusLobeRad * kFundusLobeRad);
       out.radiance += radiance;
       out.electrons += radiance * lights_[k].electrons_per_radiance;
     }
@@ -233,10 +262,10 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
                                 std::to_string(options.samples_per_pixel) +
                                 ": must be in [1, 1048576]");
   }
-  if (options.iris_cache_resolution < 2 || options.iris_cache_resolution > 4096) {
+  if (options.iris_cache_resolution < 2 || options.iris_cache_resolution > 513) {
     throw std::invalid_argument("render: iris_cache_resolution = " +
                                 std::to_string(options.iris_cache_resolution) +
-                                ": must be in [2, 4096]");
+                                ": must be in [2, 513]");
   }
   if (options.region) {
     const PixelRegion& r = *options.region;

@@ -283,6 +283,86 @@ TEST(IrisIrradianceCache, MatchesMonteCarloThroughTwoSphericalSurfaces) {
                              {{0, 0, 0.75}, {4.7, 0, 0.5}, {0, -4.7, 0.5}, {-3.0, 2.0, 0.75}});
 }
 
+// E = I T dOmega/dA with dOmega/dA from the solver alone: the directions
+// from the light to the anterior point for iris points 1e-4 mm apart,
+// |du/dx x du/dy . u|; T from the angle-form Fresnel factors.
+double solver_irradiance(const Eye& eye, const Point3& light, double intensity, double x, double y) {
+  const EyeModel& m = eye.model();
+  const double z = iris_plane_z(m);
+  const Point3 light_eye = eye.eye_from_world() * light;
+  const auto direction = [&](double px, double py) {
+    const Refraction r = solve_refraction(eye, world(eye, px, py, z), light);
+    EXPECT_EQ(r.status, PathStatus::ok) << px << ", " << py;
+    const Vector3 u = eye.eye_from_world() * r.anterior_point - light_eye;
+    return u / u.norm();
+  };
+  const double d = 1e-4;
+  const Refraction r = solve_refraction(eye, world(eye, x, y, z), light);
+  EXPECT_EQ(r.status, PathStatus::ok) << x << ", " << y;
+  const Vector3 du_dx = (direction(x + d, y) - direction(x - d, y)) / (2 * d);
+  const Vector3 du_dy = (direction(x, y + d) - direction(x, y - d)) / (2 * d);
+  const double solid_angle_per_area = std::abs(purkinje::dot(cross(du_dx, du_dy), direction(x, y)));
+  double transmittance;
+  if (m.posterior_cornea) {
+    const double n_c = m.posterior_cornea->cornea_index;
+    transmittance = 1 - fresnel_angle_form(std::cos(r.outer_angle_rad), 1.0, n_c);
+    // The posterior sphere's centre, eye frame: its apex is the thickness
+    // behind the anterior apex.
+    const PosteriorCornea& back = *m.posterior_cornea;
+    const Point3 centre{0, 0, m.anterior_cornea.radius_mm - back.thickness_mm - back.surface.radius_mm};
+    const Point3 x1 = eye.eye_from_world() * r.anterior_point;
+    const Point3 x2 = eye.eye_from_world() * *r.posterior_point;
+    const Vector3 inside = x1 - x2, normal = x2 - centre;
+    const double cos_back = purkinje::dot(inside, normal) / (inside.norm() * normal.norm());
+    transmittance *= 1 - fresnel_angle_form(cos_back, n_c, m.aqueous_index);
+  } else {
+    transmittance = 1 - fresnel_angle_form(std::cos(r.outer_angle_rad), 1.0, m.aqueous_index);
+  }
+  return intensity * transmittance * solid_angle_per_area * 1e6;
+}
+
+// At the grid's nodes the cache holds the exact irradiance.
+TEST(IrisIrradianceCache, NodesHoldTheSolversIrradiance) {
+  for (const EyeModel& m : {keratometric_eye(), navarro_eye()}) {
+    const Eye eye = posed(m);
+    const Point3 light = light_at(eye, 30 * kDeg, 35);
+    const IrisIrradianceCache cache(eye, light, 0.01, 9);
+    const double h = cache.half_size_mm();
+    for (const auto& [i, j] : {std::pair{4, 4}, std::pair{2, 4}, std::pair{6, 3}, std::pair{3, 6}}) {
+      const double x = -h + 2 * h * i / 8, y = -h + 2 * h * j / 8;
+      const double expected = solver_irradiance(eye, light, 0.01, x, y);
+      EXPECT_NEAR(cache.irradiance_w_m2(world(eye, x, y, iris_plane_z(m))), expected, 1e-6 * expected)
+          << m.name << " node " << i << ", " << j;
+    }
+  }
+}
+
+// Between the nodes, at 33 per side, within 0.5% wherever the iris gets a
+// tenth of the light's peak or more, for a remote and a near light.
+TEST(IrisIrradianceCache, InterpolatesWithinHalfAPercent) {
+  for (const EyeModel& m : {keratometric_eye(), navarro_eye()}) {
+    const Eye eye = posed(m);
+    for (const double distance : {600.0, 35.0}) {
+      const Point3 light = light_at(eye, 30 * kDeg, distance);
+      const IrisIrradianceCache cache(eye, light, 1.0, 33);
+      const double peak = solver_irradiance(eye, light, 1.0, 1.0, 0.0);
+      int checked = 0;
+      for (int k = 0; k < 24; ++k) {
+        // Spread over the iris (away from its rim, where the iris plane
+        // meets the posterior cornea), off the nodes.
+        const double angle = k * 2.399963, r = 2.0 + 3.2 * std::sqrt((k + 0.5) / 24);
+        const double x = r * std::cos(angle), y = r * std::sin(angle);
+        const double cached = cache.irradiance_w_m2(world(eye, x, y, iris_plane_z(m)));
+        if (cached < 0.1 * peak) continue;
+        const double exact = solver_irradiance(eye, light, 1.0, x, y);
+        EXPECT_NEAR(cached, exact, 5e-3 * exact) << m.name << " at " << distance << " mm, " << x << ", " << y;
+        ++checked;
+      }
+      EXPECT_GT(checked, 15) << m.name << " at " << distance << " mm";
+    }
+  }
+}
+
 TEST(IrisIrradianceCache, LightBehindTheEyeGivesNothing) {
   for (const EyeModel& m : {keratometric_eye(), navarro_eye()}) {
     const Eye eye = posed(m);

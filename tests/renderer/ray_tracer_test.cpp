@@ -749,7 +749,7 @@ Scene remote_scene_with_lids() {
   return scene;
 }
 
-TEST(RayTracer, TheRemoteScenesCameraSeesThePupilAtTheImageOfThePupilCentre) {
+TEST(RayTracer, TheRemoteScenesCameraSeesTheCorneaAndSomethingInEveryPixel) {
   const Scene scene = remote_scene_with_lids();
   const RayTracer tracer(scene);
   const Camera& camera = scene.cameras.at(0);

@@ -13,6 +13,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/image_io.h"
@@ -316,6 +317,61 @@ TEST(RenderPupil, SegmentationEllipseCentreMatchesLabel) {
     EXPECT_LT(error, 0.1) << name;
     RecordProperty(std::string(name) + "_pupil_centre_px", std::to_string(error));
   }
+}
+
+// ------------------------------------------------------------ bright pupil
+
+// With a light at the camera's centre (alpha = 0) the pupil's radiance is
+// rho E / (pi alpha0^2) with alpha0 = 1.5 degrees, against albedo E / pi
+// for a flat iris under about the same irradiance E (both seen through the
+// same cornea): a ratio rho / (alpha0^2 albedo). The bundled off-axis LEDs
+// (9.5 degrees away) leave the pupil dark.
+TEST(RenderPupil, CoaxialLightMakesItBrightOffAxisLightsLeaveItDark) {
+  Scene scene = bundled("remote");
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.iris_texture_contrast = 0;
+  look.fundus_reflectance = 0.05;
+  scene.eyes[0].set_appearance(look);
+  const SceneTruth truth = compute_truth(scene);
+  const Pixel centre = truth.views[0].pupil.ellipse.center;
+  const double radius = truth.views[0].pupil.ellipse.semi_axis_1_px;
+  RenderOptions options;
+  options.samples_per_pixel = 4;
+  options.noise = false;
+  options.region = around(centre, static_cast<int>(radius) + 6, scene.cameras[0]);
+  const auto pupil_and_iris = [&](const RenderResult& r) {
+    const int u = static_cast<int>(std::lround(centre.u)), v = static_cast<int>(std::lround(centre.v));
+    const int iris_u = static_cast<int>(std::lround(centre.u + radius + 2.5));
+    EXPECT_EQ(aov(r, "pupil").at(u, v), 1.0f);
+    EXPECT_EQ(aov(r, "iris").at(iris_u, v), 1.0f);
+    return std::pair<double, double>{r.radiance.at(u, v), r.radiance.at(iris_u, v)};
+  };
+  const auto [dark_pupil, lit_iris] = pupil_and_iris(render(scene, 0, options));
+  EXPECT_GT(lit_iris, 0);
+  EXPECT_LT(dark_pupil, 1e-6 * lit_iris);
+
+  Illuminator coaxial;
+  coaxial.name = "coaxial";
+  coaxial.position = scene.cameras[0].center();
+  coaxial.radiant_intensity_w_sr = 0.3;
+  scene.illuminators = {coaxial};
+  const auto [bright_pupil, iris] = pupil_and_iris(render(scene, 0, options));
+  const double alpha0 = 1.5 * std::numbers::pi / 180;
+  const double expected_ratio = look.fundus_reflectance / (alpha0 * alpha0 * look.iris_albedo);
+  // The irradiance on the iris plane is not quite uniform: allow for its
+  // spread between the pupil centre and the iris ring where the iris pixel lies.
+  const Eye& eye = scene.eyes[0];
+  const IrisIrradianceCache cache(eye, coaxial.position, coaxial.radiant_intensity_w_sr, 33);
+  const double e_centre = cache.irradiance_w_m2(eye.pupil_center());
+  double spread = 0;
+  for (int i = 0; i < 36; ++i) {
+    const double a = i * std::numbers::pi / 18;
+    const Point3 p = eye.world_from_eye() *
+                     (eye.eye_from_world() * eye.pupil_center() + Vector3{2.6 * std::cos(a), 2.6 * std::sin(a), 0});
+    spread = std::max(spread, std::abs(cache.irradiance_w_m2(p) / e_centre - 1));
+  }
+  RecordProperty("iris_irradiance_spread", std::to_string(spread));
+  EXPECT_NEAR(bright_pupil / iris / expected_ratio, 1.0, spread + 0.02);
 }
 
 // ------------------------------------------------------------ determinism

@@ -65,21 +65,31 @@ class IrisIrradianceCache {
   double iris_plane_z_mm_ = 0;  // eye frame
   double half_size_mm_ = 0;
   int resolution_ = 0;
-  // What is interpolated, as E = spread * c * (1 - Fresnel reflectance at
-  // the anterior cornea for incidence cosine c): c falls linearly to 0 at
-  // the light's horizon on the cornea and the spread stays smooth there,
-  // where E itself has no simple form. The lit margin (mm) is how far
-  // inside the limbus the path crosses the cornea, capped by how far inside
-  // the cornea the iris point lies; interpolated, it cuts the lit region's
-  // edge sharply inside a cell. Nodes just beyond the paths hold the
-  // paths' continuation or an extrapolation.
+  // Interpolated per node: the spread S and the chart point (u, v), the
+  // eye-frame x and y where the path crosses the anterior cornea. At a
+  // lookup, the cosine of incidence c there and whether it lies inside the
+  // limbus follow exactly from (u, v), and E = S c (1 - Fresnel reflectance
+  // at c). S and (u, v) are smooth everywhere, also where c falls to 0 at
+  // the light's horizon on the cornea and E has no simple form. Nodes just
+  // beyond the paths hold their continuation or an extrapolation, so that
+  // the lit region's edges fall exactly inside cells. Nodes farther out
+  // hold nothing (known = false), and a lookup that needs one is dark.
   struct GridNode {
     double spread_w_m2 = 0;
-    double cos_incidence = -1;
-    double lit_margin_mm = -1;
+    double chart_u_mm = 0;
+    double chart_v_mm = 0;
+    bool known = false;
   };
+  // Eye frame: the light, the anterior cornea and the disc of the iris
+  // plane inside the cornea.
+  Point3 light_mm_;
+  double apex_z_mm_ = 0;
+  double anterior_radius_mm_ = 0;
+  double anterior_one_plus_q_ = 1;
+  double limbus_depth_mm_ = 0;
+  double inside_radius_mm_ = -1;
   double anterior_inner_index_ = 1;
-  std::vector<GridNode> nodes_;  // row-major, y rows of x columns, eye frame
+  std::vector<GridNode> nodes_;  // row-major, y rows of x columns
 };
 
 // Procedural iris albedo at a point of the iris plane given in the eye

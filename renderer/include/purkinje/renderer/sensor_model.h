@@ -46,7 +46,7 @@ PointSpread point_spread(const Camera& camera, double depth_mm);
 // input unchanged.
 ImagePlane blur(const ImagePlane& plane, const PointSpread& psf);
 
-// Adds the image of a point source carrying `electrons` in total, centred at
+// Adds the image of a point source carrying `total_electrons`, centred at
 // pixel (u, v) (OpenCV convention: pixel centres at integers), spread by
 // the point spread and by the source's own image, a Gaussian of covariance
 // `source_cov_px2` (u-u, u-v, v-v), e.g. an LED's finite size. The

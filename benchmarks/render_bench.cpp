@@ -1,0 +1,91 @@
+// Speed against error of the fast renderer on the bundled scenes.
+//
+// Time per image covers render() (tracing, iris caches, glints, optics and
+// sensor), not file writing. With PURKINJE_BENCH_ERROR=1 each benchmark
+// also reports `rel_error`: the RMSE of the noise-free linear image against
+// a 256-sample render, divided by that render's mean over pixels where it
+// is non-zero, leaving out glint pixels (glint AOV > 1%). That is
+// convergence in samples, not yet against the brute-force reference mode.
+
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <string>
+
+#include "purkinje/models/scene_file.h"
+#include "purkinje/renderer/render.h"
+
+namespace purkinje::renderer {
+namespace {
+
+const Scene& scene(const std::string& name) {
+  static std::map<std::string, Scene> scenes;
+  auto it = scenes.find(name);
+  if (it == scenes.end()) {
+    it = scenes.emplace(name, load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json")).first;
+  }
+  return it->second;
+}
+
+const RenderResult& converged(const std::string& name) {
+  static std::map<std::string, RenderResult> results;
+  auto it = results.find(name);
+  if (it == results.end()) {
+    RenderOptions options;
+    options.samples_per_pixel = 256;
+    options.noise = false;
+    options.seed = 12345;
+    it = results.emplace(name, render(scene(name), 0, options)).first;
+  }
+  return it->second;
+}
+
+double relative_error(const RenderResult& r, const RenderResult& ref) {
+  const ImagePlane* glint = nullptr;
+  for (const NamedPlane& p : ref.aovs) {
+    if (p.name == "glint") glint = &p.plane;
+  }
+  double sum_sq = 0, sum_ref = 0;
+  long n = 0, lit = 0;
+  for (std::size_t i = 0; i < ref.electrons.values.size(); ++i) {
+    if (glint && glint->values[i] > 0.01f) continue;
+    const double d = double(r.electrons.values[i]) - ref.electrons.values[i];
+    sum_sq += d * d;
+    ++n;
+    if (ref.electrons.values[i] > 0) {
+      sum_ref += ref.electrons.values[i];
+      ++lit;
+    }
+  }
+  return std::sqrt(sum_sq / n) / (sum_ref / lit);
+}
+
+void render_scene(benchmark::State& state, const std::string& name) {
+  RenderOptions options;
+  options.samples_per_pixel = static_cast<int>(state.range(0));
+  options.noise = false;
+  RenderResult last;
+  for (auto _ : state) {
+    last = render(scene(name), 0, options);
+    benchmark::DoNotOptimize(last.electrons.values.data());
+  }
+  state.counters["images_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                      benchmark::Counter::kIsRate);
+  if (const char* e = std::getenv("PURKINJE_BENCH_ERROR"); e && std::string(e) == "1") {
+    state.counters["rel_error"] = relative_error(last, converged(name));
+  }
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
+}
+
+void BM_RenderRemote(benchmark::State& s) { render_scene(s, "remote"); }
+void BM_RenderHeadset(benchmark::State& s) { render_scene(s, "headset"); }
+BENCHMARK(BM_RenderRemote)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadset)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace purkinje::renderer

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -119,22 +120,28 @@ int run_render(const RenderRequest& request) {
     std::cerr << "purkinje render: error: " << error.what() << "\n";
     return kBadInput;
   }
-  options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
+  options.mode = r::RenderMode::fast;
   options.samples_per_pixel = request.samples;
   options.seed = request.seed;
   options.noise = !request.no_noise;
   options.per_light_glint_masks = request.glint_masks;
   options.threads = request.threads;
 
-  std::error_code ec;
-  std::filesystem::create_directories(request.output_dir, ec);
-  if (ec) {
-    std::cerr << "purkinje render: error: " << request.output_dir << ": cannot create the output folder: "
-              << ec.message() << "\n";
-    return kOutputError;
+  // Every camera is rendered before anything is written, so a failure
+  // leaves no file at all: all images go out in one all-or-nothing set.
+  std::vector<std::string> stems;
+  for (int camera : cameras) {
+    const std::string stem = file_stem(scene.name, scene.cameras[camera].name());
+    if (std::find(stems.begin(), stems.end(), stem) != stems.end()) {
+      std::cerr << "purkinje render: error: " << request.scene_file << ": cameras '"
+                << scene.cameras[camera].name() << "' and another camera would both write " << stem
+                << ".*: give them names that differ in letters, digits, '-', '_' or '.'\n";
+      return kBadInput;
+    }
+    stems.push_back(stem);
   }
-
   const bool terminal = isatty(STDERR_FILENO) != 0;
+  std::vector<r::RenderResult> results;
   for (int camera : cameras) {
     const std::string& name = scene.cameras[camera].name();
     std::mutex progress_mutex;
@@ -143,29 +150,42 @@ int run_render(const RenderRequest& request) {
       options.progress = [&](double fraction) {
         const std::lock_guard<std::mutex> lock(progress_mutex);
         const int percent = static_cast<int>(fraction * 100);
-        if (percent == shown) return;
+        if (percent <= shown) return;  // workers may report out of order
         shown = percent;
         std::fprintf(stderr, "\rrendering %s: %3d%%", name.c_str(), percent);
       };
     }
-    r::RenderResult result;
     try {
-      result = r::render(scene, camera, options);
+      results.push_back(r::render(scene, camera, options));
     } catch (const std::exception& error) {
       if (terminal) std::fprintf(stderr, "\n");
       std::cerr << "purkinje render: error: " << request.scene_file << ": " << error.what() << "\n";
       return kBadInput;
     }
     if (terminal) std::fprintf(stderr, "\r\033[K");
-    try {
-      const r::RenderFiles files =
-          r::write_render(request.output_dir, file_stem(scene.name, name), scene, result, options);
-      std::cout << "wrote " << files.image.string() << ", " << files.exr.filename().string() << ", "
-                << files.labels.filename().string() << "\n";
-    } catch (const std::exception& error) {
-      std::cerr << "purkinje render: error: " << error.what() << "\n";
-      return kOutputError;
+  }
+
+  std::error_code ec;
+  std::filesystem::create_directories(request.output_dir, ec);
+  if (ec) {
+    std::cerr << "purkinje render: error: " << request.output_dir << ": cannot create the output folder: "
+              << ec.message() << "\n";
+    return kOutputError;
+  }
+  try {
+    r::FileSet files;
+    std::vector<r::RenderFiles> written;
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      written.push_back(r::add_render(files, request.output_dir, stems[i], scene, results[i], options));
     }
+    files.commit();
+    for (const r::RenderFiles& f : written) {
+      std::cout << "wrote " << f.image.string() << ", " << f.exr.filename().string() << ", "
+                << f.labels.filename().string() << "\n";
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje render: error: " << error.what() << "\n";
+    return kOutputError;
   }
   return kOk;
 }
@@ -206,8 +226,9 @@ int run(int argc, char** argv) {
   render->add_option("-o,--output", render_request.output_dir, "Output folder (created if missing)")
       ->required();
   render->add_option("--camera", render_request.camera, "Render only the camera of this name");
-  render->add_option("--mode", render_request.mode, "fast (default) or reference (brute force)")
-      ->check(CLI::IsMember({"fast", "reference"}))
+  render->add_option("--mode", render_request.mode,
+                     "fast (the brute-force reference mode is not available yet)")
+      ->check(CLI::IsMember({"fast"}))
       ->capture_default_str();
   render->add_option("--samples", render_request.samples, "Camera rays per pixel")
       ->check(CLI::Range(1, 1 << 20))

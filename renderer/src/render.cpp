@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <atomic>
 #include <numbers>
 #include <optional>
@@ -392,18 +393,23 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
     });
   });
 
-  // Optics: one point spread per image, at the depth of the first eye.
-  double focus_depth = 1.0;
-  if (!scene.eyes.empty()) focus_depth = (camera.camera_from_world() * scene.eyes[0].cornea_center()).z;
-  const PointSpread psf = point_spread(camera, std::max(focus_depth, 1e-3));
+  // Optics: one point spread per image, at the depth of the nearest eye in
+  // front of the camera (without one, no defocus).
+  PointSpread psf{camera.sensor().psf_sigma_px, 0.0};
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const Eye& eye : scene.eyes) {
+    const double z = (camera.camera_from_world() * eye.cornea_center()).z;
+    if (z > camera.focal_length_mm() && z < nearest) nearest = z;
+  }
+  if (std::isfinite(nearest)) psf = point_spread(camera, nearest);
   arena.execute([&] { result.electrons = blur(diffuse_electrons, psf); });
 
   // Glints: explicit, from the solver, imaged through the same optics.
   const std::size_t n_lights = scene.illuminators.size();
   std::vector<ImagePlane> glint_planes(n_lights, ImagePlane(width, height));
-  for (const EyeInCameraTruth& view : result.truth.views) {
+  for (EyeInCameraTruth& view : result.truth.views) {
     if (view.camera != camera_index) continue;
-    for (const GlintTruth& g : view.glints) {
+    for (GlintTruth& g : view.glints) {
       GlintImage image;
       image.eye = view.eye;
       image.illuminator = g.illuminator;
@@ -411,6 +417,10 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
       const Illuminator& light = scene.illuminators[g.illuminator];
       if (g.status == PathStatus::ok) {
         image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection);
+        if (image.radiometry.status != PathStatus::ok) {
+          // The labels must not promise a glint the image lacks.
+          g.status = image.status = image.radiometry.status;
+        }
         image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm);
         if (image.electrons > 0 && std::isfinite(image.electrons)) {
           add_point_image(glint_planes[g.illuminator], g.pixel.u, g.pixel.v, image.electrons, psf,

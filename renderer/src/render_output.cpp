@@ -1,6 +1,8 @@
 // Writing a rendered image as files: PNG, EXR and labels, all-or-nothing.
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "purkinje/models/labels.h"
@@ -33,6 +35,27 @@ json sensor_json(const Sensor& s, bool noise) {
   return out;
 }
 
+// Whether the brightest noise-free pixel within 3 px of the glint reaches
+// the level where the sensor clips: the full well, or the ADC's top at
+// gains above 1.
+bool saturates(const RenderResult& result, const GlintImage& g, const Camera& camera) {
+  const Sensor& s = camera.sensor();
+  const double clip = s.full_well_e / std::max(1.0, s.gain);
+  for (const EyeInCameraTruth& view : result.truth.views) {
+    if (view.camera != result.camera || view.eye != g.eye) continue;
+    const Pixel p = view.glints[g.illuminator].pixel;
+    const ImagePlane& e = result.electrons;
+    double peak = 0;
+    for (int y = static_cast<int>(std::floor(p.v)) - 3; y <= static_cast<int>(std::ceil(p.v)) + 3; ++y) {
+      for (int x = static_cast<int>(std::floor(p.u)) - 3; x <= static_cast<int>(std::ceil(p.u)) + 3; ++x) {
+        if (x >= 0 && y >= 0 && x < e.width && y < e.height) peak = std::max(peak, double(e.at(x, y)));
+      }
+    }
+    return peak >= clip;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::string render_labels_json(const Scene& scene, const RenderResult& result,
@@ -59,7 +82,7 @@ std::string render_labels_json(const Scene& scene, const RenderResult& result,
     out["fresnel_reflectance"] = number(g.radiometry.fresnel);
     out["power_w"] = number(g.radiometry.power_w);
     out["electrons"] = number(g.electrons);
-    out["saturates"] = g.electrons > 0 && g.electrons >= camera.sensor().full_well_e;
+    out["saturates"] = g.status == PathStatus::ok && saturates(result, g, camera);
     glints.push_back(out);
   }
   render["glints"] = glints;
@@ -67,23 +90,29 @@ std::string render_labels_json(const Scene& scene, const RenderResult& result,
   return labels.dump(2) + "\n";
 }
 
-RenderFiles write_render(const std::filesystem::path& dir, const std::string& stem, const Scene& scene,
-                         const RenderResult& result, const RenderOptions& options) {
+RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std::string& stem,
+                       const Scene& scene, const RenderResult& result, const RenderOptions& options) {
   RenderFiles files{dir / (stem + ".png"), dir / (stem + ".exr"), dir / (stem + ".json")};
-  std::vector<NamedPlane> planes;
-  planes.push_back({"Y", result.radiance});
-  planes.push_back({"electrons", result.electrons});
-  for (const NamedPlane& p : result.aovs) planes.push_back(p);
-  const std::string labels = render_labels_json(scene, result, options, files);
-
-  FileSet set;
-  set.add(files.image, [&](const std::filesystem::path& t) { write_png(t, result.sensor); });
-  set.add(files.exr, [&](const std::filesystem::path& t) { write_exr(t, planes); });
-  set.add(files.labels, [&](const std::filesystem::path& t) {
+  auto planes = std::make_shared<std::vector<NamedPlane>>();
+  planes->push_back({"Y", result.radiance});
+  planes->push_back({"electrons", result.electrons});
+  for (const NamedPlane& p : result.aovs) planes->push_back(p);
+  auto sensor = std::make_shared<SensorImage>(result.sensor);
+  auto labels = std::make_shared<std::string>(render_labels_json(scene, result, options, files));
+  set.add(files.image, [sensor](const std::filesystem::path& t) { write_png(t, *sensor); });
+  set.add(files.exr, [planes](const std::filesystem::path& t) { write_exr(t, *planes); });
+  set.add(files.labels, [labels](const std::filesystem::path& t) {
     // write_file_atomically renames its own temporary onto `t`; FileSet
     // then renames `t` into place with the others.
-    write_file_atomically(t, labels);
+    write_file_atomically(t, *labels);
   });
+  return files;
+}
+
+RenderFiles write_render(const std::filesystem::path& dir, const std::string& stem, const Scene& scene,
+                         const RenderResult& result, const RenderOptions& options) {
+  FileSet set;
+  const RenderFiles files = add_render(set, dir, stem, scene, result, options);
   set.commit();
   return files;
 }

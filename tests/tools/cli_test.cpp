@@ -264,6 +264,29 @@ TEST_F(Cli, RenderOfABadSceneExitsOneAndWritesNothing) {
   EXPECT_NE(err().find("no_such_camera"), std::string::npos) << err();
 }
 
+// Two cameras whose names differ only in characters that file names drop
+// would overwrite each other's files: refused before anything is written.
+TEST_F(Cli, RenderRefusesCamerasThatWouldShareFileNames) {
+  std::ifstream in(kSourceDir / "assets/scenes/headset.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string scene = text.str();
+  const std::string camera = "\"name\": \"eye_cam\",";
+  const std::size_t at = scene.find(camera);
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t open = scene.rfind('{', at);
+  const std::size_t close = scene.find("\n    }", at) + 6;
+  std::string second = scene.substr(open, close - open);
+  second.replace(second.find("eye_cam"), 7, "eye cam");
+  scene.insert(close, ",\n    " + second);
+  const fs::path file = root_ / "two_cameras.json";
+  std::ofstream(file) << scene;
+  EXPECT_EQ(run("render " + quoted(file.string()) + " -o " + quoted(output_dir_.string()) + " --samples 1"), 1)
+      << err();
+  EXPECT_NE(err().find("eye cam"), std::string::npos) << err();
+  EXPECT_TRUE(output_dir_entries().empty());
+}
+
 TEST_F(Cli, RenderIntoAnUnwritableFolderExitsThree) {
   std::ofstream(output_dir_ / "a_file") << "not a folder";
   EXPECT_EQ(run(render_arguments(output_dir_ / "a_file" / "images")), 3);

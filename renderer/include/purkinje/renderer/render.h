@@ -8,8 +8,8 @@
 // cornea, direct light with shadow rays, iris light through the cornea
 // from an exact cache on the iris plane (IrisIrradianceCache), glints
 // computed explicitly and imaged through the point-spread function.
-// Reference mode estimates the same light transport by brute force to
-// validate the fast mode (see docs/rendering.md).
+// Reference mode, which will estimate the same light transport by brute
+// force to validate the fast mode, is not available yet (render() rejects it).
 
 #include <cstdint>
 #include <filesystem>
@@ -49,7 +49,8 @@ struct RenderOptions {
 };
 
 // Pixel classes of the segmentation AOV ("id"): the first diffuse surface
-// a pixel's centre sees, through the cornea where it passes through it.
+// seen through the cornea where the ray passes it; per pixel, the class
+// most of its samples see.
 enum class PixelClass : int { background = 0, skin = 1, sclera = 2, iris = 3, pupil = 4 };
 
 struct GlintImage {
@@ -83,6 +84,11 @@ RenderResult render(const Scene& scene, int camera, const RenderOptions& options
 struct RenderFiles {
   std::filesystem::path image, exr, labels;
 };
+class FileSet;
+// Adds <dir>/<stem>.png, .exr and .json to `files` (copying what they
+// need), so that several images can be committed all-or-nothing together.
+RenderFiles add_render(FileSet& files, const std::filesystem::path& dir, const std::string& stem,
+                       const Scene& scene, const RenderResult& result, const RenderOptions& options);
 // Writes <dir>/<stem>.png, .exr and .json all-or-nothing (FileSet);
 // throws OutputError naming the file and the reason.
 RenderFiles write_render(const std::filesystem::path& dir, const std::string& stem, const Scene& scene,

@@ -6,11 +6,11 @@
 
 #include <cmath>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "purkinje/renderer/radiometry.h"
+#include "require.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -27,23 +27,8 @@ constexpr double kPi = 3.14159265358979323846;
 // incidence and 9e-7 at 89 degrees.
 constexpr double kRelativeStep = 1e-4;
 
-void require_non_negative(const std::string& what, double value) {
-  if (!(value >= 0) || !std::isfinite(value)) {
-    std::ostringstream out;
-    out.precision(17);
-    out << what << " = " << value << ": must be >= 0 and finite";
-    throw std::invalid_argument(out.str());
-  }
-}
-
-void require_positive(const std::string& what, double value) {
-  if (!(value > 0) || !std::isfinite(value)) {
-    std::ostringstream out;
-    out.precision(17);
-    out << what << " = " << value << ": must be > 0 and finite";
-    throw std::invalid_argument(out.str());
-  }
-}
+using detail::require_non_negative;
+using detail::require_positive;
 
 // A perturbed reflection is usable for differencing whenever its geometry
 // exists: a neighbour of a glint near the limbus may fall just off the cap,

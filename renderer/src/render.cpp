@@ -405,8 +405,12 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   arena.execute([&] { result.electrons = blur(diffuse_electrons, psf); });
 
   // Glints: explicit, from the solver, imaged through the same optics.
+  // Per-light planes only when their masks are asked for: a full image per
+  // LED is memory and summing that most renders do not need.
   const std::size_t n_lights = scene.illuminators.size();
-  std::vector<ImagePlane> glint_planes(n_lights, ImagePlane(width, height));
+  ImagePlane glint_total(width, height);
+  std::vector<ImagePlane> glint_planes(options.per_light_glint_masks ? n_lights : 0,
+                                       ImagePlane(width, height));
   for (EyeInCameraTruth& view : result.truth.views) {
     if (view.camera != camera_index) continue;
     for (GlintTruth& g : view.glints) {
@@ -423,16 +427,16 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
         }
         image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm);
         if (image.electrons > 0 && std::isfinite(image.electrons)) {
-          add_point_image(glint_planes[g.illuminator], g.pixel.u, g.pixel.v, image.electrons, psf,
+          add_point_image(glint_total, g.pixel.u, g.pixel.v, image.electrons, psf,
                           image.radiometry.source_cov_px2);
+          if (options.per_light_glint_masks) {
+            add_point_image(glint_planes[g.illuminator], g.pixel.u, g.pixel.v, image.electrons, psf,
+                            image.radiometry.source_cov_px2);
+          }
         }
       }
       result.glints.push_back(image);
     }
-  }
-  ImagePlane glint_total(width, height);
-  for (const ImagePlane& p : glint_planes) {
-    for (std::size_t i = 0; i < p.values.size(); ++i) glint_total.values[i] += p.values[i];
   }
   for (std::size_t i = 0; i < glint_total.values.size(); ++i) {
     result.electrons.values[i] += glint_total.values[i];

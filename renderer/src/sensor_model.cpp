@@ -1,5 +1,7 @@
 #include "purkinje/renderer/sensor_model.h"
 
+#include "require.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -17,31 +19,15 @@
 namespace purkinje::renderer {
 namespace {
 
+using detail::fail;
+using detail::require_non_negative;
+using detail::require_positive;
+
 constexpr double kPlanck = 6.62607015e-34;    // J s (exact, SI 2019)
 constexpr double kLightSpeed = 299792458.0;   // m / s (exact)
 
 // Random streams used inside this file; callers of uniform01 keep below 2^63.
 constexpr std::uint64_t kNoiseStream = 0x8000000000000001ull;
-
-// Shortest text that reads back as the same double ("0.005", not
-// "0.0050000000000000001").
-std::string format(double value) {
-  std::array<char, 32> text{};
-  const auto end = std::to_chars(text.data(), text.data() + text.size(), value).ptr;
-  return std::string(text.data(), end);
-}
-
-[[noreturn]] void fail(const std::string& what, double value, const std::string& rule) {
-  throw std::invalid_argument(what + " = " + format(value) + ": " + rule);
-}
-
-void require_positive(const char* what, double value) {
-  if (!(std::isfinite(value) && value > 0)) fail(what, value, "must be finite and > 0");
-}
-
-void require_non_negative(const char* what, double value) {
-  if (!(std::isfinite(value) && value >= 0)) fail(what, value, "must be finite and >= 0");
-}
 
 void require_plane(const char* what, const ImagePlane& plane) {
   if (plane.width < 0 || plane.height < 0 ||
@@ -614,7 +600,7 @@ PointSpread point_spread(const Camera& camera, double depth_mm) {
   const double focus = *sensor.focus_distance_mm;
   if (!(std::isfinite(focus) && focus > f)) {
     fail("sensor.focus_distance_mm", focus,
-         "must be finite and beyond the focal length " + format(f) + " mm");
+         "must be finite and beyond the focal length " + detail::format_number(f) + " mm");
   }
   // Thin lens: the sensor sits at the image distance of the focus plane; a
   // point at depth z converges before or after it, leaving a blur circle of
@@ -650,7 +636,7 @@ void add_point_image(ImagePlane& electrons, double u, double v, double total_ele
   const double bound = std::sqrt(source_cov_px2[0] * source_cov_px2[2]);
   if (std::abs(cov) > bound * (1 + 1e-9) + 1e-12) {
     fail("source_cov_px2[1] (u-v)", cov,
-         "must not exceed sqrt(u-u * v-v) = " + format(bound) + " in magnitude (positive semi-definite)");
+         "must not exceed sqrt(u-u * v-v) = " + detail::format_number(bound) + " in magnitude (positive semi-definite)");
   }
   cov = std::clamp(cov, -bound, bound);
   if (total_electrons == 0 || electrons.values.empty()) return;

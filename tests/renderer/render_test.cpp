@@ -409,6 +409,27 @@ TEST(RenderDeterminism, SameSeedSameBytesWithOneAndTwoThreads) {
   std::filesystem::remove_all(root);
 }
 
+// Each light's glint mask is its share of the pixel's signal, so together
+// they make up the glint mask.
+TEST(RenderGlints, PerLightMasksAddUpToTheGlintMask) {
+  Scene scene = bundled("headset");
+  RenderOptions options;
+  options.samples_per_pixel = 1;
+  options.noise = false;
+  options.per_light_glint_masks = true;
+  options.region = PixelRegion{150, 150, 250, 250};
+  const RenderResult r = render(scene, 0, options);
+  const ImagePlane& total = aov(r, "glint");
+  double largest = 0;
+  for (std::size_t i = 0; i < total.values.size(); ++i) {
+    double sum = 0;
+    for (const Illuminator& l : scene.illuminators) sum += aov(r, "glint." + l.name).values[i];
+    EXPECT_NEAR(sum, total.values[i], 1e-5) << "pixel " << i;
+    largest = std::max(largest, double(total.values[i]));
+  }
+  EXPECT_GT(largest, 0.5);  // some pixel is mostly glint
+}
+
 TEST(RenderOptionsCheck, BadOptionsThrowNamingTheValue) {
   const Scene scene = bundled("headset");
   RenderOptions options;

@@ -611,6 +611,23 @@ void check_eye_model(const EyeModel& m, const Location& eye) {
                          format_number(m.rotation_center_depth_mm) +
                          ") so that the cornea stands out of the sclera");
   }
+  // The sclera must reach the limbus plane, or nothing can join the
+  // cornea's edge to the eyeball and light would leak into the eye.
+  const double limbus_depth = *sag_mm(front, limbus);
+  if (!(limbus_depth < m.rotation_center_depth_mm)) {
+    eye.child("rotation_center_depth_mm")
+        .fail_number(m.rotation_center_depth_mm,
+                     "must be > the limbus's depth behind the corneal apex (" +
+                         format_number(limbus_depth) + " mm)");
+  }
+  const double limbus_above_center = m.rotation_center_depth_mm - limbus_depth;
+  if (!(limbus_above_center < m.sclera_radius_mm)) {
+    eye.child("sclera_radius_mm")
+        .fail_number(m.sclera_radius_mm,
+                     "must be > " + format_number(limbus_above_center) +
+                         " mm, the limbus plane's distance from the centre of rotation, so that the "
+                         "sclera reaches the cornea's edge");
+  }
 }
 
 EyeModel read_eye_model(Object& e) {

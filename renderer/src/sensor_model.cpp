@@ -9,6 +9,7 @@
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <cstdint>
 #include <numbers>
 #include <sstream>
@@ -716,7 +717,9 @@ SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint6
     unsigned short* out = image.values.data() + row;
     for (int x = 0; x < electrons.width; ++x) {
       const double mean = in[x];
-      double e = std::isfinite(mean) && mean > 0 ? mean : 0.0;
+      // NaN and negative light count as none; light that overflowed to
+      // +inf saturates like any other far too bright pixel.
+      double e = mean > 0 ? std::min(mean, std::numeric_limits<double>::max()) : 0.0;
       // So far above the full well that no draw could come back below it.
       const bool saturated = e > full_well && e - 40 * std::sqrt(e) - 40 * read_noise > full_well;
       if (noise && !saturated) {

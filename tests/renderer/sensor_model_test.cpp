@@ -442,17 +442,19 @@ TEST(Expose, ClipsAtFullWellAndAtTheAdcMaximum) {
   EXPECT_EQ(expose(e, s, 1).values[0], 65535);
 }
 
-TEST(Expose, NonFiniteOrNegativeElectronsCountAsZero) {
+TEST(Expose, NaNOrNegativeElectronsCountAsZeroAndInfinitySaturates) {
   ImagePlane e(4, 1);
-  e.values = {std::numeric_limits<float>::quiet_NaN(), -5.0f, std::numeric_limits<float>::infinity(),
-              -std::numeric_limits<float>::infinity()};
+  e.values = {std::numeric_limits<float>::quiet_NaN(), -5.0f,
+              -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
   Sensor s;
   s.noise = false;
-  EXPECT_EQ(expose(e, s, 3).values, (std::vector<unsigned short>(4, 0)));
+  EXPECT_EQ(expose(e, s, 3).values, (std::vector<unsigned short>{0, 0, 0, 255}));
   // With noise only the read noise remains: a few electrons, a DN or so.
   s.noise = true;
   s.read_noise_e = 4;
-  for (unsigned short dn : expose(e, s, 3).values) EXPECT_LE(dn, 1);
+  const SensorImage noisy = expose(e, s, 3);
+  for (int i = 0; i < 3; ++i) EXPECT_LE(noisy.values[i], 1);
+  EXPECT_EQ(noisy.values[3], 255);
 }
 
 TEST(Expose, RejectsUnsupportedBitDepthsNamingThem) {

@@ -66,7 +66,7 @@ void add_point_image(ImagePlane& electrons, double u, double v, double total_ele
 
 // Noise (when sensor.noise), full-well clipping, gain and quantization:
 // DN = round(clip(e, 0, full well) * gain * (2^bits - 1) / full well),
-// clipped to 2^bits - 1. Non-finite or negative electrons count as 0.
+// clipped to 2^bits - 1. NaN or negative electrons count as 0; +inf saturates.
 // Shot noise is Poisson, exact: inversion below 10 electrons, Hormann's
 // transformed rejection (PTRS) above, normal only above 1e10; read noise
 // Gaussian (ziggurat). Both are drawn from a counter-based generator keyed by

@@ -85,6 +85,7 @@ struct RenderRequest {
   std::string camera;  // empty: every camera
   std::string mode = "fast";
   int samples = purkinje::renderer::RenderOptions{}.samples_per_pixel;
+  std::int64_t photons = purkinje::renderer::RenderOptions{}.reference_photons_per_light;
   std::uint64_t seed = 0;
   bool no_noise = false;
   bool glint_masks = false;
@@ -120,7 +121,8 @@ int run_render(const RenderRequest& request) {
     std::cerr << "purkinje render: error: " << error.what() << "\n";
     return kBadInput;
   }
-  options.mode = r::RenderMode::fast;
+  options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
+  options.reference_photons_per_light = request.photons;
   options.samples_per_pixel = request.samples;
   options.seed = request.seed;
   options.noise = !request.no_noise;
@@ -227,11 +229,16 @@ int run(int argc, char** argv) {
       ->required();
   render->add_option("--camera", render_request.camera, "Render only the camera of this name");
   render->add_option("--mode", render_request.mode,
-                     "fast (the brute-force reference mode is not available yet)")
-      ->check(CLI::IsMember({"fast"}))
+                     "fast, or reference: brute force, to validate fast (many times slower;\n"
+                     "use --samples 256 or more)")
+      ->check(CLI::IsMember({"fast", "reference"}))
       ->capture_default_str();
   render->add_option("--samples", render_request.samples, "Camera rays per pixel")
       ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
+  render->add_option("--photons", render_request.photons,
+                     "Reference mode: photons per light and eye for the light through the cornea")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 30))
       ->capture_default_str();
   render->add_option("--seed", render_request.seed, "Seed of jitter and sensor noise")
       ->capture_default_str();

@@ -10,13 +10,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <atomic>
+#include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "integrator.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/sensor_model.h"
 
@@ -33,11 +35,6 @@ const char* to_string(RenderMode mode) {
 namespace {
 
 constexpr double kInvPi = 1.0 / std::numbers::pi;
-// Scene lengths are mm; irradiance is per m^2.
-constexpr double kPerSquareMm = 1e6;
-// Secondary rays start this far off the surface they leave (mm); hits are
-// exact in double precision, so a nanometre is plenty.
-constexpr double kRayOffsetMm = 1e-6;
 // Interfaces crossed or reflected at before a path is dropped: enough for
 // both corneal surfaces in and out plus a reflection.
 constexpr int kMaxSpecularDepth = 6;
@@ -52,27 +49,17 @@ constexpr double kFundusLobeRad = 1.5 * std::numbers::pi / 180;
 // Random-number streams (see uniform01): one per purpose.
 enum Stream : std::uint64_t { kJitterStream = 1, kSensorStream = 2 };
 
-struct Light {
-  Point3 position;
-  double intensity_w_sr = 0;
-  double electrons_per_radiance = 0;  // for this light's wavelength
-};
+}  // namespace
 
-// What a path contributes: physical radiance, and the electrons it yields
-// (radiance weighted by each light's wavelength response).
-struct Contribution {
-  double radiance = 0;
-  double electrons = 0;
-};
-
-// What the pixel's primary path saw first, for AOVs.
-struct PrimaryRecord {
-  PixelClass pixel_class = PixelClass::background;
-  bool hit = false;
-  double depth_mm = 0;
-  Vector3 normal;
-  bool through_cornea = false;
-};
+std::vector<Light> lights_of(const Scene& scene, const Camera& camera) {
+  std::vector<Light> lights;
+  for (const Illuminator& l : scene.illuminators) {
+    lights.push_back({l.position, l.radiant_intensity_w_sr,
+                      electrons_per_unit_radiance(camera.sensor(), l.wavelength_nm),
+                      0.5 * l.emitter_diameter_mm});
+  }
+  return lights;
+}
 
 PixelClass class_of(Surface s) {
   switch (s) {
@@ -84,15 +71,91 @@ PixelClass class_of(Surface s) {
   }
 }
 
-class Integrator {
- public:
-  Integrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
-             const RenderOptions& options)
-      : scene_(scene), camera_(camera), tracer_(tracer) {
-    for (const Illuminator& l : scene.illuminators) {
-      lights_.push_back({l.position, l.radiant_intensity_w_sr,
-                         electrons_per_unit_radiance(camera.sensor(), l.wavelength_nm)});
+void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* record) {
+  if (!record) return;
+  if (depth == 0 && hit.surface != Surface::none) {
+    record->hit = true;
+    record->depth_mm = (camera.camera_from_world() * hit.point).z;
+    record->normal = hit.normal;
+    record->through_cornea = hit.surface == Surface::cornea_anterior;
+  }
+  record->pixel_class = class_of(hit.surface);
+}
+
+double diffuse_albedo(const Scene& scene, const Hit& hit) {
+  switch (hit.surface) {
+    case Surface::skin:
+      return scene.eyes[hit.eye].appearance().skin_albedo;
+    case Surface::sclera:
+      return hit.front_face ? scene.eyes[hit.eye].appearance().sclera_albedo : 0.0;
+    case Surface::iris: {
+      const Eye& eye = scene.eyes[hit.eye];
+      const Point3 local = eye.eye_from_world() * hit.point;
+      return iris_albedo(eye.model(), eye.appearance(), local.x, local.y);
     }
+    default:
+      return 0;
+  }
+}
+
+InterfaceCrossing cross_interface(const Scene& scene, const Ray& ray, const Hit& hit) {
+  const EyeModel& m = scene.eyes[hit.eye].model();
+  double n_outer = 1.0, n_inner = anterior_inner_index(m);
+  if (hit.surface == Surface::cornea_posterior) {
+    n_outer = m.posterior_cornea->cornea_index;
+    n_inner = m.aqueous_index;
+  }
+  const Vector3 d = ray.direction.vector();
+  const bool entering = dot(d, hit.normal.vector()) < 0;
+  const double n1 = entering ? n_outer : n_inner;
+  const double n2 = entering ? n_inner : n_outer;
+  InterfaceCrossing c;
+  c.facing = entering ? hit.normal.vector() : -hit.normal.vector();
+  c.eta = n1 / n2;
+  const double cos_i = std::clamp(-dot(d, c.facing), 0.0, 1.0);
+  c.reflectance = fresnel_reflectance(cos_i, n1, n2);
+  if (c.reflectance < 1.0) {
+    const double k = 1.0 - c.eta * c.eta * (1.0 - cos_i * cos_i);
+    c.transmitted = UnitVector3::try_normalize(d * c.eta + c.facing * (c.eta * cos_i - std::sqrt(std::max(k, 0.0))));
+  }
+  c.reflected = UnitVector3::try_normalize(d + c.facing * (2.0 * cos_i));
+  return c;
+}
+
+// Retro-reflection from the fundus: of the light entering the pupil, a
+// fraction fundus_reflectance returns through it into a narrow Gaussian
+// lobe about the direction back to its source. Seen at an angle alpha
+// from that direction, a pupil point under irradiance E has radiance
+// rho E exp(-(alpha/alpha0)^2) / (pi alpha0^2), the lobe's solid angle
+// being pi alpha0^2. Far from the camera's axis (alpha >> alpha0) the
+// pupil stays dark.
+double bright_pupil_radiance(const Eye& eye, const Point3& light, const Point3& camera_center,
+                             double irradiance_w_m2) {
+  const double rho = eye.appearance().fundus_reflectance;
+  if (!(rho > 0) || !(irradiance_w_m2 > 0)) return 0;
+  const Point3 c = eye.cornea_center();
+  const double x = angle_between(light - c, camera_center - c) / kFundusLobeRad;
+  if (x > 6) return 0;  // exp(-36): nothing
+  return rho * irradiance_w_m2 * std::exp(-x * x) / (std::numbers::pi * kFundusLobeRad * kFundusLobeRad);
+}
+
+namespace {
+
+// Additive recurrence (the R2 sequence): well-spread points of the unit
+// square for any count, shifted by (shift_u, shift_v).
+std::array<double, 2> subpixel_offset_r2(int sample, double shift_u, double shift_v) {
+  constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
+  const double u = shift_u + a1 * sample, v = shift_v + a2 * sample;
+  return {u - std::floor(u), v - std::floor(v)};
+}
+
+// Fast mode: Fresnel-weighted splitting at the cornea, direct light from
+// point lights with shadow rays, iris light from the exact caches.
+class FastIntegrator final : public PathIntegrator {
+ public:
+  FastIntegrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
+                 const RenderOptions& options)
+      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)) {
     const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
       return !tracer_.occluded_except_cornea(light, cornea);
     };
@@ -102,40 +165,45 @@ class Integrator {
         iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr,
                               options.iris_cache_resolution, visible);
       }
+      build_iris_indirect(static_cast<int>(e));
     }
   }
 
+  void sample(const Ray& ray, std::uint64_t, Contribution& out, PrimaryRecord& record) const override {
+    trace(ray, 0, 1.0, out, &record);
+  }
+
+ private:
   // Radiance arriving along `ray`, times `weight`, added to `out`.
   // `record` is filled along the transmitted chain of the primary path.
   void trace(const Ray& ray, int depth, double weight, Contribution& out,
              PrimaryRecord* record) const {
     const Hit hit = tracer_.intersect(ray);
-    if (record && depth == 0 && hit.surface != Surface::none) {
-      record->hit = true;
-      record->depth_mm = (camera_.camera_from_world() * hit.point).z;
-      record->normal = hit.normal;
-      record->through_cornea = hit.surface == Surface::cornea_anterior;
-    }
+    record_hit(hit, camera_, depth, record);
     switch (hit.surface) {
       case Surface::none:
         return;
       case Surface::skin:
-      case Surface::sclera: {
-        if (record) record->pixel_class = class_of(hit.surface);
-        if (hit.surface == Surface::sclera && !hit.front_face) return;  // the eye's dark inside
-        const EyeAppearance& look = scene_.eyes[hit.eye].appearance();
-        const double albedo = hit.surface == Surface::skin ? look.skin_albedo : look.sclera_albedo;
-        direct_light(hit, albedo * weight, out);
+      case Surface::sclera:
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, albedo * weight, out);
         return;
-      }
       case Surface::iris: {
-        if (record) record->pixel_class = PixelClass::iris;
-        iris_light(hit, weight, out);
+        const Point3 local = scene_.eyes[hit.eye].eye_from_world() * hit.point;
+        const double albedo = diffuse_albedo(scene_, hit);
+        const IrisIndirect& indirect = iris_indirect_[hit.eye];
+        for (std::size_t k = 0; k < lights_.size(); ++k) {
+          const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point) + indirect.irradiance_w_m2(local, k);
+          out.add(weight * albedo * kInvPi * e, lights_[k]);
+        }
         return;
       }
       case Surface::pupil:
-        if (record) record->pixel_class = PixelClass::pupil;
-        bright_pupil(hit, weight, out);
+        for (std::size_t k = 0; k < lights_.size(); ++k) {
+          const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
+          out.add(weight * bright_pupil_radiance(scene_.eyes[hit.eye], lights_[k].position,
+                                                 camera_.center(), e),
+                  lights_[k]);
+        }
         return;
       case Surface::cornea_anterior:
       case Surface::cornea_posterior:
@@ -144,96 +212,138 @@ class Integrator {
     }
   }
 
- private:
   // Lambertian surface lit directly by the point lights; `scaled_albedo`
   // carries the path weight.
   void direct_light(const Hit& hit, double scaled_albedo, Contribution& out) const {
+    direct_light(hit, scaled_albedo, [&](std::size_t k, double radiance) { out.add(radiance, lights_[k]); });
+  }
+  template <typename AddPerLight>
+  void direct_light(const Hit& hit, double scaled_albedo, const AddPerLight& add) const {
     const Vector3 n = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
     const Point3 origin = hit.point + n * kRayOffsetMm;
-    for (const Light& l : lights_) {
+    for (std::size_t k = 0; k < lights_.size(); ++k) {
+      const Light& l = lights_[k];
       const Vector3 to_light = l.position - hit.point;
       const double d2 = to_light.squared_norm();
       const double cos_theta = dot(n, to_light) / std::sqrt(d2);
       if (!(cos_theta > 0)) continue;
       if (tracer_.occluded(origin, l.position)) continue;
-      const double radiance = scaled_albedo * kInvPi * l.intensity_w_sr * cos_theta / d2 * kPerSquareMm;
-      out.radiance += radiance;
-      out.electrons += radiance * l.electrons_per_radiance;
+      add(k, scaled_albedo * kInvPi * l.intensity_w_sr * cos_theta / d2 * kPerSquareMm);
     }
   }
 
-  void iris_light(const Hit& hit, double weight, Contribution& out) const {
-    const Eye& eye = scene_.eyes[hit.eye];
-    const Point3 local = eye.eye_from_world() * hit.point;
-    const double albedo = iris_albedo(eye.model(), eye.appearance(), local.x, local.y);
-    for (std::size_t k = 0; k < lights_.size(); ++k) {
-      const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
-      const double radiance = weight * albedo * kInvPi * e;
-      out.radiance += radiance;
-      out.electrons += radiance * lights_[k].electrons_per_radiance;
+  // Light that reaches the iris after one diffuse bounce elsewhere: iris
+  // light that the cornea's inner side reflects back (totally, beyond the
+  // critical angle) and lids and skin seen through the cornea. A few
+  // percent of the iris's light, more near the limbus, and smooth over the
+  // iris: so computed at the nodes of a coarse grid on the iris plane by
+  // gathering over the hemisphere (kIndirectRays low-discrepancy
+  // directions, cosine-distributed) and interpolated bilinearly.
+  struct IrisIndirect {
+    double half_mm = 0, step_mm = 1;
+    int side = 0;
+    std::size_t lights = 0;
+    std::vector<double> irradiance;  // [node][light], W/m^2
+    double irradiance_w_m2(const Point3& eye_frame_point, std::size_t light) const {
+      if (side == 0) return 0;
+      const double fx = std::clamp((eye_frame_point.x + half_mm) / step_mm, 0.0, side - 1.0);
+      const double fy = std::clamp((eye_frame_point.y + half_mm) / step_mm, 0.0, side - 1.0);
+      const int x0 = std::min(static_cast<int>(fx), side - 2), y0 = std::min(static_cast<int>(fy), side - 2);
+      const double tx = fx - x0, ty = fy - y0;
+      const auto at = [&](int x, int y) { return irradiance[(static_cast<std::size_t>(y) * side + x) * lights + light]; };
+      return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
+             ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+    }
+  };
+  static constexpr int kIndirectSide = 13;
+  static constexpr int kIndirectRays = 64;
+
+  void build_iris_indirect(int eye_index) {
+    const Eye& eye = scene_.eyes[eye_index];
+    const EyeModel& m = eye.model();
+    IrisIndirect& cache = iris_indirect_[eye_index];
+    cache.side = kIndirectSide;
+    cache.lights = lights_.size();
+    cache.half_mm = m.iris_radius_mm;
+    cache.step_mm = 2 * cache.half_mm / (cache.side - 1);
+    cache.irradiance.assign(static_cast<std::size_t>(cache.side) * cache.side * cache.lights, 0.0);
+    const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
+    // Nodes outside the iris gather as if at its rim, so that lookups near
+    // the rim interpolate between iris values.
+    const double r_max = 0.98 * m.iris_radius_mm;
+    const UnitVector3 n = eye.world_from_eye().rotation() * UnitVector3::unit_z();
+    Vector3 a = std::abs(n.x()) < 0.9 ? cross(n.vector(), Vector3{1, 0, 0}) : cross(n.vector(), Vector3{0, 1, 0});
+    a = a * (1.0 / a.norm());
+    const Vector3 b = cross(n.vector(), a);
+    tbb::parallel_for(0, cache.side * cache.side, [&](int node) {
+      double x = -cache.half_mm + cache.step_mm * (node % cache.side);
+      double y = -cache.half_mm + cache.step_mm * (node / cache.side);
+      const double r = std::hypot(x, y);
+      if (r > r_max) x *= r_max / r, y *= r_max / r;
+      const Point3 origin = eye.world_from_eye() * Point3{x, y, z} + n.vector() * kRayOffsetMm;
+      double* e = &cache.irradiance[static_cast<std::size_t>(node) * cache.lights];
+      for (int i = 0; i < kIndirectRays; ++i) {
+        const auto [u, v] = subpixel_offset_r2(i, 0.5, 0.5);
+        const double s = std::sqrt(u), phi = 2 * std::numbers::pi * v;
+        const auto dir = UnitVector3::try_normalize(n.vector() * std::sqrt(std::max(0.0, 1 - u)) +
+                                                    a * (s * std::cos(phi)) + b * (s * std::sin(phi)));
+        if (!dir) continue;
+        // Cosine-distributed directions: E = pi * mean radiance.
+        gather({origin, *dir}, 0, std::numbers::pi / kIndirectRays, eye_index, e);
+      }
+    });
+  }
+
+  // Radiance arriving along a ray leaving the iris, after one more
+  // diffuse reflection, times `weight`, per light into `e`.
+  void gather(const Ray& ray, int depth, double weight, int eye_index, double* e) const {
+    const Hit hit = tracer_.intersect(ray);
+    const auto add = [&](std::size_t k, double radiance) { e[k] += radiance; };
+    switch (hit.surface) {
+      case Surface::skin:
+      case Surface::sclera:
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, weight * albedo, add);
+        return;
+      case Surface::iris: {
+        const double albedo = diffuse_albedo(scene_, hit);
+        for (std::size_t k = 0; k < lights_.size(); ++k) {
+          add(k, weight * albedo * kInvPi * iris_[hit.eye][k].irradiance_w_m2(hit.point));
+        }
+        return;
+      }
+      case Surface::cornea_anterior:
+      case Surface::cornea_posterior: {
+        if (depth >= kMaxSpecularDepth) return;
+        const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+        const double w_t = weight * (1 - c.reflectance) * c.eta * c.eta, w_r = weight * c.reflectance;
+        if (c.transmitted && w_t > kMinBranchWeight * weight) {
+          gather({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w_t, eye_index, e);
+        }
+        if (c.reflected && w_r > kMinBranchWeight * weight) {
+          gather({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_r, eye_index, e);
+        }
+        return;
+      }
+      default:
+        return;  // the pupil (the eye's dark inside) or nothing
     }
   }
 
-  // Retro-reflection from the fundus: of the light entering the pupil, a
-  // fraction fundus_reflectance returns through it into a narrow Gaussian
-  // lobe about the direction back to its source. Seen at an angle alpha
-  // from that direction, a pupil point under irradiance E has radiance
-  // rho E exp(-(alpha/alpha0)^2) / (pi alpha0^2), the lobe's solid angle
-  // being pi alpha0^2. Far from the camera's axis (alpha >> alpha0) the
-  // pupil stays dark.
-  void bright_pupil(const Hit& hit, double weight, Contribution& out) const {
-    const Eye& eye = scene_.eyes[hit.eye];
-    const double rho = eye.appearance().fundus_reflectance;
-    if (!(rho > 0)) return;
-    const Point3 c = eye.cornea_center();
-    const Vector3 to_camera = camera_.center() - c;
-    for (std::size_t k = 0; k < lights_.size(); ++k) {
-      const double alpha = angle_between(lights_[k].position - c, to_camera);
-      const double x = alpha / kFundusLobeRad;
-      if (x > 6) continue;  // exp(-36): nothing
-      const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
-      const double radiance =
-          weight * rho * e * std::exp(-x * x) / (std::numbers::pi * kFundusLobeRad * kFundusLobeRad);
-      out.radiance += radiance;
-      out.electrons += radiance * lights_[k].electrons_per_radiance;
-    }
-  }
-
-  // Fresnel reflection and refraction at a corneal surface. Radiance
-  // crossing from index n2 into n1 scales by (n1 / n2)^2.
+  // Fresnel reflection and refraction at a corneal surface, both traced.
+  // Radiance crossing from index n2 into n1 scales by (n1 / n2)^2.
   void interface(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
                  PrimaryRecord* record) const {
     if (depth >= kMaxSpecularDepth) return;
-    const EyeModel& m = scene_.eyes[hit.eye].model();
-    double n_outer = 1.0, n_inner = anterior_inner_index(m);
-    if (hit.surface == Surface::cornea_posterior) {
-      n_outer = m.posterior_cornea->cornea_index;
-      n_inner = m.aqueous_index;
-    }
-    const Vector3 d = ray.direction.vector();
-    const bool entering = dot(d, hit.normal.vector()) < 0;
-    const double n1 = entering ? n_outer : n_inner;
-    const double n2 = entering ? n_inner : n_outer;
-    const Vector3 facing = entering ? hit.normal.vector() : -hit.normal.vector();
-    const double cos_i = std::clamp(-dot(d, facing), 0.0, 1.0);
-    const double reflectance = fresnel_reflectance(cos_i, n1, n2);
-
-    if (reflectance < 1.0) {
-      const double eta = n1 / n2;
-      const double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-      const Vector3 t = d * eta + facing * (eta * cos_i - std::sqrt(std::max(k, 0.0)));
-      if (const auto dir = UnitVector3::try_normalize(t)) {
-        const double w = weight * (1.0 - reflectance) * eta * eta;
-        if (w > kMinBranchWeight * 1e-3) {
-          trace({hit.point - facing * kRayOffsetMm, *dir}, depth + 1, w, out, record);
-        }
+    const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+    if (c.transmitted) {
+      const double w = weight * (1.0 - c.reflectance) * c.eta * c.eta;
+      if (w > kMinBranchWeight * 1e-3) {
+        trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w, out, record);
       }
     }
-    const double w_reflected = weight * reflectance;
-    if (w_reflected > kMinBranchWeight) {
-      if (const auto dir = UnitVector3::try_normalize(d + facing * (2.0 * cos_i))) {
-        trace({hit.point + facing * kRayOffsetMm, *dir}, depth + 1, w_reflected, out, nullptr);
-      }
+    const double w_reflected = weight * c.reflectance;
+    if (w_reflected > kMinBranchWeight && c.reflected) {
+      trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected, out, nullptr);
     }
   }
 
@@ -242,15 +352,9 @@ class Integrator {
   const RayTracer& tracer_;
   std::vector<Light> lights_;
   std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
+  std::vector<IrisIndirect> iris_indirect_ = std::vector<IrisIndirect>(scene_.eyes.size());  // [eye]
 };
 
-// Additive recurrence (the R2 sequence): well-spread sub-pixel positions
-// for any sample count; a per-pixel random shift decorrelates pixels.
-std::array<double, 2> subpixel_offset(int sample, double shift_u, double shift_v) {
-  constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
-  const double u = shift_u + a1 * sample, v = shift_v + a2 * sample;
-  return {u - std::floor(u), v - std::floor(v)};
-}
 
 void validate(const Scene& scene, int camera, const RenderOptions& options) {
   if (camera < 0 || camera >= static_cast<int>(scene.cameras.size())) {
@@ -282,8 +386,10 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
     throw std::invalid_argument("render: threads = " + std::to_string(options.threads) +
                                 ": must be >= 0 (0: all)");
   }
-  if (options.mode == RenderMode::reference) {
-    throw std::invalid_argument("render: the reference mode is not available yet");
+  if (options.reference_photons_per_light < 1 || options.reference_photons_per_light > (std::int64_t{1} << 30)) {
+    throw std::invalid_argument("render: reference_photons_per_light = " +
+                                std::to_string(options.reference_photons_per_light) +
+                                ": must be in [1, 2^30]");
   }
 }
 
@@ -330,8 +436,14 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   const RayTracer tracer(scene);
   apply_visibility(scene, camera_index, tracer, result.truth);
 
-  std::optional<Integrator> integrator;
-  arena.execute([&] { integrator.emplace(scene, camera, tracer, options); });
+  std::unique_ptr<PathIntegrator> integrator;
+  arena.execute([&] {
+    if (options.mode == RenderMode::reference) {
+      integrator = make_reference_integrator(scene, camera, tracer, options);
+    } else {
+      integrator = std::make_unique<FastIntegrator>(scene, camera, tracer, options);
+    }
+  });
 
   result.radiance = ImagePlane(width, height);
   ImagePlane diffuse_electrons(width, height);
@@ -360,10 +472,11 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
           std::array<PrimaryRecord, kClasses> first_of_class{};
           int cornea_hits = 0;
           for (int s = 0; s < spp; ++s) {
-            const auto [ou, ov] = subpixel_offset(s, shift_u, shift_v);
+            // A per-pixel random shift decorrelates pixels.
+            const auto [ou, ov] = subpixel_offset_r2(s, shift_u, shift_v);
             const UnitVector3 dir = camera.back_project({x - 0.5 + ou, y - 0.5 + ov});
             PrimaryRecord record;
-            integrator->trace({center, dir}, 0, 1.0, sum, &record);
+            integrator->sample({center, dir}, pixel * spp + s, sum, record);
             const int c = static_cast<int>(record.pixel_class);
             if (counts[c]++ == 0) first_of_class[c] = record;
             cornea_hits += record.through_cornea ? 1 : 0;

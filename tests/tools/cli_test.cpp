@@ -197,6 +197,7 @@ TEST_F(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(run("render " + scene), 2) << "render without an output folder";
   EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --samples 0"), 2);
   EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --mode magic"), 2);
+  EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --mode reference --photons 0"), 2);
   EXPECT_EQ(run("truth " + scene + " --format xml"), 2);
   EXPECT_EQ(run("truth " + scene + " --pupil-points -3"), 2);
   EXPECT_EQ(run("truth " + scene + " --no-such-option"), 2);

@@ -8,8 +8,13 @@
 // cornea, direct light with shadow rays, iris light through the cornea
 // from an exact cache on the iris plane (IrisIrradianceCache), glints
 // computed explicitly and imaged through the point-spread function.
-// Reference mode, which will estimate the same light transport by brute
-// force to validate the fast mode, is not available yet (render() rejects it).
+// Reference mode estimates the same light transport by brute force, to
+// validate the fast mode: camera paths with diffuse interreflection and
+// emitters of their finite size sampled at every diffuse bounce; light
+// reaching the iris through the cornea from photons traced from the LEDs
+// through the cornea (reflections inside it included) and binned on the
+// iris plane. Glints are imaged explicitly in both modes: camera rays
+// cannot find them (docs/rendering.md).
 
 #include <cstdint>
 #include <filesystem>
@@ -39,6 +44,9 @@ struct RenderOptions {
   std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
   bool noise = true;              // false: no shot or read noise whatever the sensor says
   int iris_cache_resolution = 33; // nodes per side of each iris irradiance cache (fast mode)
+  // Reference mode: photons traced from each light into each eye, binned on
+  // the iris plane; the binning's noise falls as 1/sqrt of this.
+  std::int64_t reference_photons_per_light = std::int64_t{1} << 22;
   bool per_light_glint_masks = false;
   // Trace only these pixels (the rest stay 0 in radiance and AOVs); glints
   // and the sensor still cover the whole image. Absent: every pixel.

@@ -1,0 +1,416 @@
+// The brute-force reference integrator, against which the fast mode is
+// measured. It shares nothing with the fast mode's shortcuts: no solver
+// paths, no irradiance caches, no point lights.
+//
+// - Camera paths: the camera's specular chain through the cornea is split
+//   into its Fresnel-weighted reflected and refracted branches, as in the
+//   fast mode; after the first diffuse bounce a path chooses one branch
+//   with probability equal to its Fresnel weight. Each diffuse hit (skin,
+//   sclera, iris) adds next-event estimation to every light, sampled over
+//   the LED's emitting disc (soft shadows), and continues in a
+//   cosine-distributed direction (interreflection between skin, lids and
+//   sclera, and light that the cornea's inner side reflects back onto the
+//   iris), up to kMaxDiffuseBounces, with Russian roulette after the first.
+// - Light reaching the iris and pupil through the cornea (a caustic that
+//   camera paths cannot find: at 600 mm an LED subtends about 1e-6 sr)
+//   comes from photons: from each LED's disc, in directions filling the
+//   cone toward the cornea, through every corneal interface with
+//   Fresnel-weighted splitting (reflections inside the cornea included),
+//   binned where they land on the iris plane. Photon directions come from
+//   a randomly shifted low-discrepancy sequence (R4), so the bins' noise is
+//   well below that of independent photons. Each bin's irradiance is
+//   flux / area; lookups interpolate bilinearly between bin centres.
+// Every random number is a pure function of (seed, purpose, index), and
+// photon flux is summed in integers, so results do not depend on threads.
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "integrator.h"
+#include "purkinje/renderer/radiometry.h"
+#include "purkinje/renderer/sensor_model.h"
+
+namespace purkinje::renderer {
+namespace {
+
+constexpr double kInvPi = 1.0 / std::numbers::pi;
+constexpr int kMaxSpecularDepth = 8;     // interface crossings per straight segment chain
+constexpr int kMaxDiffuseBounces = 4;    // albedos <= 0.55: the 5th bounce carries < 2%
+constexpr double kMinBranchWeight = 1e-6;
+// Random numbers per camera path (its index is shifted by this many bits).
+constexpr int kDimensionBits = 10;
+constexpr std::uint64_t kDimensions = std::uint64_t{1} << kDimensionBits;
+// Random streams; the fast mode and the sensor use 1 and 2.
+constexpr std::uint64_t kPathStream = 3;
+constexpr std::uint64_t kPhotonStream = 4;
+// Photon flux is summed in units of 2^-32 of a photon's flux, so that sums
+// are exact integers whatever the order of the threads (at most 2^30
+// photons of weight about 1 keep a bin below 2^63).
+constexpr double kFluxQuantum = 4294967296.0;
+// About this many photons per bin on average over the grid (the iris and
+// pupil fill about 70% of it); bins stay between 8 and 512 per side.
+constexpr double kPhotonsPerBin = 250;
+
+// Orthonormal vectors perpendicular to a direction (of any length).
+void basis(const Vector3& direction, Vector3& a, Vector3& b) {
+  const Vector3 n = direction * (1.0 / direction.norm());
+  a = std::abs(n.x) < 0.9 ? cross(n, Vector3{1, 0, 0}) : cross(n, Vector3{0, 1, 0});
+  a = a * (1.0 / a.norm());
+  b = cross(n, a);
+}
+
+// A uniform point of the disc of radius r about `center`, facing `normal`.
+Point3 point_on_disc(const Point3& center, const Vector3& normal, double r, double u, double v) {
+  if (!(r > 0)) return center;
+  Vector3 a, b;
+  basis(normal, a, b);
+  const double rho = r * std::sqrt(u), phi = 2 * std::numbers::pi * v;
+  return center + a * (rho * std::cos(phi)) + b * (rho * std::sin(phi));
+}
+
+// The randomly shifted R4 sequence (Roberts' generalized golden ratio),
+// computed in 64-bit fixed point so that it stays exact for any index.
+class R4Sequence {
+ public:
+  R4Sequence(std::uint64_t seed, std::uint64_t stream_index) {
+    constexpr double phi4 = 1.1673039782614187;  // the real root of x^5 = x + 1
+    double alpha = 1.0;
+    for (int i = 0; i < 4; ++i) {
+      alpha /= phi4;
+      step_[i] = static_cast<std::uint64_t>(std::ldexp(alpha, 64));
+      shift_[i] = static_cast<std::uint64_t>(
+          std::ldexp(uniform01(seed, kPhotonStream, 4 * stream_index + i), 64));
+    }
+  }
+  double at(std::uint64_t n, int dim) const {
+    return std::ldexp(static_cast<double>((shift_[dim] + n * step_[dim]) >> 11), -53);
+  }
+
+ private:
+  std::uint64_t step_[4] = {}, shift_[4] = {};
+};
+
+// Radius of the iris plane's disc inside the eye's shell (the iris reaches
+// out to the sclera; see ray_tracer.cpp).
+double outer_radius(const EyeModel& m) {
+  const double dz = m.rotation_center_depth_mm - m.iris_depth_mm;
+  const double r2 = m.sclera_radius_mm * m.sclera_radius_mm - dz * dz;
+  return std::max(m.iris_radius_mm, r2 > 0 ? std::sqrt(r2) : 0.0);
+}
+
+// Irradiance on one eye's iris plane from one light, from traced photons.
+class IrisPhotonMap {
+ public:
+  IrisPhotonMap(const Scene& scene, int eye_index, const Light& light, int light_index,
+                const RayTracer& tracer, std::int64_t photons, std::uint64_t seed)
+      : scene_(scene), eye_(scene.eyes[eye_index]), tracer_(tracer) {
+    const EyeModel& m = eye_.model();
+    eye_from_world_ = eye_.eye_from_world();
+    half_ = outer_radius(m) + 0.1;
+    side_ = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(photons) / kPhotonsPerBin)), 8, 512);
+    bin_ = 2 * half_ / side_;
+
+    // Every point of the anterior cap lies within this distance of the
+    // cornea centre: x^2 + y^2 + z^2 = R^2 - Q w^2 there.
+    const double q = m.anterior_cornea.asphericity;
+    const double d_l = m.limbus_depth_mm();
+    const double bound = std::sqrt(m.anterior_cornea.radius_mm * m.anterior_cornea.radius_mm +
+                                   std::max(0.0, -q) * d_l * d_l) + 0.05;
+    const Point3 center = eye_.cornea_center();
+    const Vector3 disc_normal = center - light.position;
+
+    const auto one_minus_cos_cone = [&](const Point3& from) {
+      const double dist = (center - from).norm();
+      const double s2 = (bound / dist) * (bound / dist);  // sin^2 of the half-angle
+      return dist > bound ? s2 / (1 + std::sqrt(1 - s2)) : 1.0;
+    };
+    const double cone0 = one_minus_cos_cone(light.position);
+    const R4Sequence sequence(seed, static_cast<std::uint64_t>(eye_index) * 4096 + light_index);
+    tbb::combinable<std::vector<std::uint64_t>> partial(
+        [n = side_ * side_] { return std::vector<std::uint64_t>(n, 0); });
+    constexpr std::int64_t kBatch = 4096;
+    const std::int64_t batches = (photons + kBatch - 1) / kBatch;
+    tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, batches), [&](const auto& range) {
+      std::vector<std::uint64_t>& bins = partial.local();
+      for (std::int64_t batch = range.begin(); batch < range.end(); ++batch) {
+        const std::int64_t end = std::min(photons, (batch + 1) * kBatch);
+        for (std::int64_t i = batch * kBatch; i < end; ++i) {
+          const auto n = static_cast<std::uint64_t>(i);
+          const Point3 origin = point_on_disc(light.position, disc_normal, light.emitter_radius_mm,
+                                              sequence.at(n, 0), sequence.at(n, 1));
+          const Vector3 to_center = center - origin;
+          const double dist = to_center.norm();
+          const double cos_cone = 1 - one_minus_cos_cone(origin);
+          // Uniform in the cone: cos(theta) uniform in [cos_cone, 1].
+          const double cos_t = 1 - sequence.at(n, 2) * (1 - cos_cone);
+          const double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
+          const double phi = 2 * std::numbers::pi * sequence.at(n, 3);
+          Vector3 a, b;
+          const Vector3 axis = to_center * (1.0 / dist);
+          basis(axis, a, b);
+          const Vector3 dir = axis * cos_t + a * (sin_t * std::cos(phi)) + b * (sin_t * std::sin(phi));
+          // Flux I * Omega / N, Omega = 2 pi (1 - cos_cone): relative to
+          // the cone from the disc's centre.
+          trace_photon({origin, UnitVector3::normalize(dir)}, (1 - cos_cone) / cone0, 0, bins);
+        }
+      }
+    });
+    std::vector<std::uint64_t> total(side_ * side_, 0);
+    partial.combine_each([&](const std::vector<std::uint64_t>& bins) {
+      for (std::size_t i = 0; i < total.size(); ++i) total[i] += bins[i];
+    });
+    // A photon of weight 1 carries I * 2 pi (1 - cos_cone) / N watts from
+    // the disc's centre; weights hold the ratio of cones and the Fresnel
+    // transmittances.
+    const double watts_per_quantum = light.intensity_w_sr * 2 * std::numbers::pi * cone0 /
+                                     static_cast<double>(photons) / kFluxQuantum;
+    // Photons land only inside the eye's shell: a bin on its rim holds the
+    // flux of the part of it inside, so dividing by the whole bin would
+    // darken the iris's edge.
+    irradiance_.assign(total.size(), 0.0);
+    inside_.assign(total.size(), false);
+    const double rim = outer_radius(m);
+    constexpr int kSub = 8;
+    for (int y = 0; y < side_; ++y) {
+      for (int x = 0; x < side_; ++x) {
+        int in = 0;
+        for (int j = 0; j < kSub; ++j) {
+          for (int i = 0; i < kSub; ++i) {
+            in += std::hypot(-half_ + (x + (i + 0.5) / kSub) * bin_, -half_ + (y + (j + 0.5) / kSub) * bin_) < rim;
+          }
+        }
+        if (in == 0) continue;
+        const std::size_t b = static_cast<std::size_t>(y) * side_ + x;
+        const double area_m2 = bin_ * bin_ * in / (kSub * kSub) / kPerSquareMm;
+        irradiance_[b] = static_cast<double>(total[b]) * watts_per_quantum / area_m2;
+        inside_[b] = true;
+      }
+    }
+  }
+
+  // Bilinear between the centres of bins inside the shell; 0 outside the grid.
+  double irradiance_w_m2(const Point3& world) const {
+    const Point3 p = eye_from_world_ * world;
+    const double fx = (p.x + half_) / bin_ - 0.5, fy = (p.y + half_) / bin_ - 0.5;
+    if (!(fx > -1 && fy > -1 && fx < side_ && fy < side_)) return 0;
+    const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+    const double tx = fx - x0, ty = fy - y0;
+    double sum = 0, weights = 0;
+    const auto add = [&](int x, int y, double w) {
+      if (x < 0 || y < 0 || x >= side_ || y >= side_) return;
+      const std::size_t b = static_cast<std::size_t>(y) * side_ + x;
+      if (!inside_[b]) return;
+      sum += w * irradiance_[b];
+      weights += w;
+    };
+    add(x0, y0, (1 - tx) * (1 - ty));
+    add(x0 + 1, y0, tx * (1 - ty));
+    add(x0, y0 + 1, (1 - tx) * ty);
+    add(x0 + 1, y0 + 1, tx * ty);
+    return weights > 0 ? sum / weights : 0;
+  }
+
+ private:
+  // Follows a photon of relative weight `weight` through the cornea,
+  // splitting at every interface; deposits where it meets the iris plane.
+  void trace_photon(const Ray& ray, double weight, int depth, std::vector<std::uint64_t>& bins) const {
+    const Hit hit = tracer_.intersect(ray);
+    switch (hit.surface) {
+      case Surface::iris:
+      case Surface::pupil: {
+        const Point3 p = eye_from_world_ * hit.point;
+        const int x = static_cast<int>(std::floor((p.x + half_) / bin_));
+        const int y = static_cast<int>(std::floor((p.y + half_) / bin_));
+        if (x >= 0 && y >= 0 && x < side_ && y < side_) {
+          bins[static_cast<std::size_t>(y) * side_ + x] += static_cast<std::uint64_t>(std::llround(weight * kFluxQuantum));
+        }
+        return;
+      }
+      case Surface::cornea_anterior:
+      case Surface::cornea_posterior: {
+        if (depth >= kMaxSpecularDepth) return;
+        const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+        const double w_t = weight * (1 - c.reflectance), w_r = weight * c.reflectance;
+        if (c.transmitted && w_t > kMinBranchWeight) {
+          trace_photon({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, w_t, depth + 1, bins);
+        }
+        // Light reflected off the front of the cornea leaves the eye.
+        const bool outside = hit.surface == Surface::cornea_anterior && dot(ray.direction.vector(), hit.normal.vector()) < 0;
+        if (!outside && c.reflected && w_r > kMinBranchWeight) {
+          trace_photon({hit.point + c.facing * kRayOffsetMm, *c.reflected}, w_r, depth + 1, bins);
+        }
+        return;
+      }
+      default:
+        return;  // lids, skin, the sclera, or nothing: this photon does not reach the iris
+    }
+  }
+
+  const Scene& scene_;
+  const Eye& eye_;
+  const RayTracer& tracer_;
+  Pose eye_from_world_;
+  double half_ = 0, bin_ = 0;
+  int side_ = 0;
+  std::vector<double> irradiance_;
+  std::vector<bool> inside_;  // the bin reaches inside the shell
+};
+
+// The random numbers of one camera path.
+class PathSampler {
+ public:
+  PathSampler(std::uint64_t seed, std::uint64_t path) : seed_(seed), base_(path << kDimensionBits) {}
+  double next() {
+    // Past the last dimension the path reuses numbers; kMaxDiffuseBounces
+    // keeps paths far below that.
+    const std::uint64_t d = dimension_++ & (kDimensions - 1);
+    return uniform01(seed_, kPathStream, base_ + d);
+  }
+
+ private:
+  std::uint64_t seed_, base_, dimension_ = 0;
+};
+
+class ReferenceIntegrator final : public PathIntegrator {
+ public:
+  ReferenceIntegrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
+                      const RenderOptions& options)
+      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)),
+        seed_(options.seed) {
+    iris_.resize(scene.eyes.size());
+    for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+      for (std::size_t k = 0; k < lights_.size(); ++k) {
+        iris_[e].emplace_back(scene, static_cast<int>(e), lights_[k], static_cast<int>(k), tracer,
+                              options.reference_photons_per_light, options.seed);
+      }
+    }
+  }
+
+  void sample(const Ray& ray, std::uint64_t path, Contribution& out, PrimaryRecord& record) const override {
+    PathSampler rng(seed_, path);
+    trace(ray, 0, 0, 1.0, rng, out, &record);
+  }
+
+ private:
+  void trace(const Ray& ray, int depth, int bounces, double weight, PathSampler& rng, Contribution& out,
+             PrimaryRecord* record) const {
+    const Hit hit = tracer_.intersect(ray);
+    record_hit(hit, camera_, depth, record);
+    switch (hit.surface) {
+      case Surface::none:
+        return;
+      case Surface::skin:
+      case Surface::sclera: {
+        const double albedo = diffuse_albedo(scene_, hit);
+        if (albedo == 0) return;  // the eye's dark inside
+        direct_light(hit, weight * albedo, rng, out);
+        indirect_light(hit, bounces, weight, albedo, rng, out);
+        return;
+      }
+      case Surface::iris: {
+        const double albedo = diffuse_albedo(scene_, hit);
+        for (std::size_t k = 0; k < lights_.size(); ++k) {
+          out.add(weight * albedo * kInvPi * iris_[hit.eye][k].irradiance_w_m2(hit.point), lights_[k]);
+        }
+        indirect_light(hit, bounces, weight, albedo, rng, out);
+        return;
+      }
+      case Surface::pupil:
+        // Only the fundus's retro-reflection comes back out of the pupil.
+        for (std::size_t k = 0; k < lights_.size(); ++k) {
+          const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
+          out.add(weight * bright_pupil_radiance(scene_.eyes[hit.eye], lights_[k].position,
+                                                 camera_.center(), e),
+                  lights_[k]);
+        }
+        return;
+      case Surface::cornea_anterior:
+      case Surface::cornea_posterior: {
+        if (depth >= kMaxSpecularDepth) return;
+        const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+        const Ray reflected{hit.point + c.facing * kRayOffsetMm, c.reflected.value_or(ray.direction)};
+        if (bounces == 0) {  // the camera's own chain: both branches
+          if (c.transmitted) {
+            const double w = weight * (1 - c.reflectance) * c.eta * c.eta;
+            if (w > kMinBranchWeight) {
+              trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, bounces, w, rng, out, record);
+            }
+          }
+          if (c.reflected && weight * c.reflectance > kMinBranchWeight) {
+            trace(reflected, depth + 1, bounces, weight * c.reflectance, rng, out, nullptr);
+          }
+        } else if (rng.next() < c.reflectance) {
+          if (c.reflected) trace(reflected, depth + 1, bounces, weight, rng, out, nullptr);
+        } else if (c.transmitted) {
+          trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, bounces,
+                weight * c.eta * c.eta, rng, out, nullptr);
+        }
+        return;
+      }
+    }
+  }
+
+  // Next-event estimation: one point of each LED's disc (facing the lit
+  // point), visible or not.
+  void direct_light(const Hit& hit, double scaled_albedo, PathSampler& rng, Contribution& out) const {
+    const Vector3 n = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
+    const Point3 origin = hit.point + n * kRayOffsetMm;
+    for (const Light& l : lights_) {
+      const double u = rng.next(), v = rng.next();
+      const Point3 q = point_on_disc(l.position, hit.point - l.position, l.emitter_radius_mm, u, v);
+      const Vector3 to_light = q - hit.point;
+      const double d2 = to_light.squared_norm();
+      const double cos_theta = dot(n, to_light) / std::sqrt(d2);
+      if (!(cos_theta > 0)) continue;
+      if (tracer_.occluded(origin, q)) continue;
+      out.add(scaled_albedo * kInvPi * l.intensity_w_sr * cos_theta / d2 * kPerSquareMm, l);
+    }
+  }
+
+  // Light arriving from other surfaces: one cosine-distributed direction.
+  void indirect_light(const Hit& hit, int bounces, double weight, double albedo, PathSampler& rng,
+                      Contribution& out) const {
+    if (bounces >= kMaxDiffuseBounces || !(albedo > 0)) return;
+    double w = weight * albedo;
+    if (bounces >= 1) {  // Russian roulette on the albedo
+      const double survive = std::min(1.0, albedo);
+      if (rng.next() >= survive) return;
+      w /= survive;
+    }
+    const Vector3 n = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
+    Vector3 a, b;
+    basis(n, a, b);
+    const double u = rng.next(), v = rng.next();
+    const double r = std::sqrt(u), phi = 2 * std::numbers::pi * v;
+    const Vector3 dir = n * std::sqrt(std::max(0.0, 1 - u)) + a * (r * std::cos(phi)) + b * (r * std::sin(phi));
+    const auto unit = UnitVector3::try_normalize(dir);
+    if (!unit) return;
+    trace({hit.point + n * kRayOffsetMm, *unit}, 0, bounces + 1, w, rng, out, nullptr);
+  }
+
+  const Scene& scene_;
+  const Camera& camera_;
+  const RayTracer& tracer_;
+  std::vector<Light> lights_;
+  std::uint64_t seed_;
+  std::vector<std::vector<IrisPhotonMap>> iris_;  // [eye][light]
+};
+
+}  // namespace
+
+std::unique_ptr<PathIntegrator> make_reference_integrator(const Scene& scene, const Camera& camera,
+                                                          const RayTracer& tracer,
+                                                          const RenderOptions& options) {
+  return std::make_unique<ReferenceIntegrator>(scene, camera, tracer, options);
+}
+
+}  // namespace purkinje::renderer

@@ -1,0 +1,172 @@
+// The brute-force reference mode against closed forms, and the fast mode
+// against the reference (docs/rendering.md, "Reference mode").
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <numbers>
+#include <string>
+
+#include "purkinje/models/scene_file.h"
+#include "purkinje/renderer/render.h"
+#include "purkinje/renderer/sensor_model.h"
+
+namespace purkinje::renderer {
+namespace {
+
+Scene bundled(const std::string& name) {
+  return load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
+}
+
+const ImagePlane& aov(const RenderResult& r, const std::string& name) {
+  for (const NamedPlane& p : r.aovs) {
+    if (p.name == name) return p.plane;
+  }
+  throw std::runtime_error("no AOV " + name);
+}
+
+// The pixels around the eye's limbus as `camera` sees it.
+PixelRegion around_limbus(const Scene& scene, int camera_index) {
+  const Camera& camera = scene.cameras[camera_index];
+  const Eye& eye = scene.eyes[0];
+  const double r = eye.model().limbus_radius_mm;
+  const double z = eye.model().anterior_cornea.radius_mm - eye.model().limbus_depth_mm();
+  double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
+  for (int i = 0; i < 16; ++i) {
+    const double a = 2 * std::numbers::pi * i / 16;
+    const Projection p = camera.project(eye.world_from_eye() * Point3{r * std::cos(a), r * std::sin(a), z});
+    u0 = std::min(u0, p.pixel.u), u1 = std::max(u1, p.pixel.u);
+    v0 = std::min(v0, p.pixel.v), v1 = std::max(v1, p.pixel.v);
+  }
+  const Intrinsics& k = camera.intrinsics();
+  return {std::clamp(static_cast<int>(u0) - 2, 0, k.width - 1), std::clamp(static_cast<int>(v0) - 2, 0, k.height - 1),
+          std::clamp(static_cast<int>(u1) + 3, 1, k.width), std::clamp(static_cast<int>(v1) + 3, 1, k.height)};
+}
+
+struct IrisMeans {
+  double fast = 0, reference = 0;
+  int pixels = 0;
+};
+
+// Mean radiance over the pixels that both modes see as iris through and
+// through (every sample), rendered without noise.
+IrisMeans iris_means(const Scene& scene, int samples, std::int64_t photons) {
+  RenderOptions options;
+  options.noise = false;
+  options.samples_per_pixel = samples;
+  options.region = around_limbus(scene, 0);
+  options.reference_photons_per_light = photons;
+  const RenderResult fast = render(scene, 0, options);
+  options.mode = RenderMode::reference;
+  const RenderResult reference = render(scene, 0, options);
+  const ImagePlane& iris_fast = aov(fast, "iris");
+  const ImagePlane& iris_reference = aov(reference, "iris");
+  IrisMeans m;
+  for (std::size_t i = 0; i < fast.radiance.values.size(); ++i) {
+    if (iris_fast.values[i] == 1.0f && iris_reference.values[i] == 1.0f) {
+      m.fast += fast.radiance.values[i];
+      m.reference += reference.radiance.values[i];
+      ++m.pixels;
+    }
+  }
+  m.fast /= m.pixels;
+  m.reference /= m.pixels;
+  return m;
+}
+
+// The bar: the fast mode's iris radiance (exact caches of solver paths,
+// straight through the cornea) within 2% of the reference's (photons
+// through the cornea with its inner reflections, interreflection, finite
+// emitters), mean over the iris.
+void expect_iris_agrees(const std::string& name) {
+  const IrisMeans m = iris_means(bundled(name), 8, std::int64_t{1} << 19);
+  const double ratio = m.fast / m.reference;
+  std::cout << name << ": mean iris radiance fast " << m.fast << ", reference " << m.reference
+            << " W m^-2 sr^-1 over " << m.pixels << " px; fast / reference - 1 = " << ratio - 1 << "\n";
+  ::testing::Test::RecordProperty(name + "_fast_over_reference_minus_1", std::to_string(ratio - 1));
+  ASSERT_GT(m.pixels, 100);
+  EXPECT_NEAR(ratio, 1.0, 0.02);
+}
+
+TEST(ReferenceMode, RemoteIrisRadianceAgreesWithFastModeWithin2Percent) { expect_iris_agrees("remote"); }
+TEST(ReferenceMode, HeadsetIrisRadianceAgreesWithFastModeWithin2Percent) { expect_iris_agrees("headset"); }
+
+// Far from the eye the skin is a plane that sees nothing but the sky, so
+// its radiance is the closed form rho I cos(theta) / (pi d^2) summed over
+// the lights, here sampled over LED discs of 5 mm: at 600 mm the disc
+// changes the mean of cos(theta) / d^2 by about (r / d)^2 ~ 2e-5.
+TEST(ReferenceMode, SkinUnderFiniteLedsMatchesClosedForm) {
+  Scene scene = bundled("remote");
+  for (Illuminator& l : scene.illuminators) l.emitter_diameter_mm = 5;
+  const Camera& camera = scene.cameras[0];
+  RenderOptions options;
+  options.mode = RenderMode::reference;
+  options.noise = false;
+  options.samples_per_pixel = 4;
+  options.reference_photons_per_light = 1000;  // the iris is not looked at
+  options.region = PixelRegion{20, 20, 40, 36};  // a corner, far from the eye
+  const RenderResult r = render(scene, 0, options);
+  const double rho = scene.eyes[0].appearance().skin_albedo;
+  const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
+  const Vector3 n = scene.eyes[0].appearance().head_forward.vector();
+  int checked = 0;
+  double worst = 0;
+  for (int y = 20; y < 36; ++y) {
+    for (int x = 20; x < 40; ++x) {
+      if (aov(r, "skin").at(x, y) != 1.0f) continue;
+      // The pixel's centre ray meets the plane at the AOV's depth; the
+      // samples spread over the pixel, where cos/d^2 varies by < 1e-4.
+      const UnitVector3 dir = camera.back_project({double(x), double(y)});
+      const Point3 p = camera.center() + dir * (aov(r, "depth").at(x, y) / dot(dir, axis));
+      double expected = 0;
+      for (const Illuminator& l : scene.illuminators) {
+        const Vector3 to = l.position - p;
+        expected += rho * l.radiant_intensity_w_sr * std::max(0.0, dot(n, to) / to.norm()) /
+                    (std::numbers::pi * to.squared_norm()) * 1e6;
+      }
+      worst = std::max(worst, std::abs(r.radiance.at(x, y) / expected - 1));
+      ++checked;
+    }
+  }
+  RecordProperty("worst_relative_error", std::to_string(worst));
+  EXPECT_GT(checked, 200);
+  EXPECT_LT(worst, 0.01);
+}
+
+// Paths and photons draw their random numbers from (seed, index) and
+// photon flux is summed in integers, so threads change nothing.
+TEST(ReferenceMode, SameSeedSameImageWithOneAndTwoThreads) {
+  const Scene scene = bundled("headset");
+  RenderOptions options;
+  options.mode = RenderMode::reference;
+  options.samples_per_pixel = 2;
+  options.reference_photons_per_light = 20000;
+  options.region = PixelRegion{170, 150, 230, 210};
+  options.seed = 3;
+  options.threads = 1;
+  const RenderResult one = render(scene, 0, options);
+  options.threads = 2;
+  const RenderResult two = render(scene, 0, options);
+  EXPECT_EQ(one.electrons.values, two.electrons.values);
+  EXPECT_EQ(one.sensor.values, two.sensor.values);
+  options.seed = 4;
+  EXPECT_NE(render(scene, 0, options).electrons.values, one.electrons.values);
+}
+
+TEST(ReferenceMode, PhotonCountOutOfRangeThrowsNamingIt) {
+  RenderOptions options;
+  options.mode = RenderMode::reference;
+  options.reference_photons_per_light = 0;
+  try {
+    render(bundled("headset"), 0, options);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("reference_photons_per_light = 0"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace purkinje::renderer

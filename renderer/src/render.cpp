@@ -141,6 +141,12 @@ class Integrator {
       case Surface::cornea_posterior:
         interface(ray, hit, depth, weight, out, record);
         return;
+      case Surface::mesh:
+        // Glasses, hands, occluders: not part of the eye, so in the
+        // segmentation with what surrounds it.
+        if (record) record->pixel_class = PixelClass::skin;
+        direct_light(hit, scene_.meshes[hit.mesh].albedo * weight, out);
+        return;
     }
   }
 

@@ -19,6 +19,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "purkinje/models/obj_file.h"
+
 namespace purkinje {
 namespace {
 
@@ -511,6 +513,53 @@ Illuminator read_illuminator(Object& l, std::size_t index) {
   return out;
 }
 
+// ----------------------------------------------------------------- meshes
+
+// A mesh file placed in the world: world = position + R (scale * file),
+// R the rotation vector's. The file is read last, so that a misspelt key
+// is reported before a large file is read.
+Mesh read_mesh(Object& m, std::size_t index, const std::filesystem::path& folder) {
+  Mesh mesh;
+  mesh.name = m.get_or<std::string>("name", "mesh" + std::to_string(index));
+  if (mesh.name.empty()) m.required("name").fail("must not be empty");
+  const Value file = m.required("file", "a Wavefront OBJ file, relative to the scene file's folder");
+  const std::filesystem::path file_name = file.as_string();
+  if (file_name.empty()) file.fail("must not be empty");
+  // No default: nothing is typical of an arbitrary object.
+  mesh.albedo = m.required("albedo", "its Lambertian albedo, 0 to 1").within(0, 1);
+  const Point3 position = m.get_or<Point3>("position_mm", Point3::origin());
+  const Vector3 degrees = m.get_or<Vector3>("rotation_vector_deg", Vector3{});
+  const double scale = m.positive_or("scale", 1.0);
+  m.finish();
+
+  const std::filesystem::path path = file_name.is_absolute() ? file_name : folder / file_name;
+  std::error_code ignored;
+  if (!std::filesystem::exists(path, ignored)) {
+    file.fail(path == file_name ? "no such file" : "no such file (looked for " + path.string() + ")");
+  }
+  ObjMesh obj;
+  try {
+    obj = load_obj(path);
+  } catch (const ObjError& error) {
+    file.fail(error.what());
+  }
+
+  const Rotation rotation = Rotation::from_rotation_vector(degrees * kDegree);
+  mesh.vertices.reserve(obj.vertices.size());
+  for (std::size_t i = 0; i < obj.vertices.size(); ++i) {
+    const Point3 p = position + rotation * (obj.vertices[i].from_origin() * scale);
+    if (!p.is_finite() || std::abs(p.x) > kMaxCoordinateMm || std::abs(p.y) > kMaxCoordinateMm ||
+        std::abs(p.z) > kMaxCoordinateMm) {
+      file.fail("vertex " + std::to_string(i + 1) + " lands at " + format_point(p) +
+                " mm, beyond +-" + format_number(kMaxCoordinateMm) +
+                " mm (1 km): check scale and position_mm");
+    }
+    mesh.vertices.push_back(p);
+  }
+  mesh.triangles = std::move(obj.triangles);
+  return mesh;
+}
+
 // ------------------------------------------------------------------- eyes
 
 // Depth below the apex of a conicoid at distance r from its axis; nullopt
@@ -901,7 +950,8 @@ json parse_json(const std::string& text, const std::string& source) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& text, const std::string& source_name) {
+Scene parse_scene(const std::string& text, const std::string& source_name,
+                  const std::filesystem::path& folder) {
   const json root_json = parse_json(text, source_name);
   Object root(Value(root_json, Location{&source_name, ""}));
 
@@ -944,6 +994,19 @@ Scene parse_scene(const std::string& text, const std::string& source_name) {
     check_unique(scene.illuminators.back().name, l);
     check_outside_eyes(scene, scene.illuminators.back().position, l.where().child("position_mm"));
   }
+  // Meshes last: their files are read only once the rest of the scene is
+  // known to be good.
+  std::set<std::string> mesh_names;
+  std::vector<Value> mesh_values = read_list(root, "meshes", false);
+  for (std::size_t i = 0; i < mesh_values.size(); ++i) {
+    Object m(mesh_values[i]);
+    scene.meshes.push_back(read_mesh(m, i, folder));
+    if (!mesh_names.insert(scene.meshes.back().name).second) {
+      const auto v = m.optional("name");
+      (v ? v->where() : m.where())
+          .fail("\"" + scene.meshes.back().name + "\"", "duplicate name (mesh names must be unique)");
+    }
+  }
   root.finish();
   return scene;
 }
@@ -962,7 +1025,7 @@ Scene load_scene(const std::filesystem::path& file) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw SceneError(file.string() + ": cannot read");
-  return parse_scene(text.str(), file.string());
+  return parse_scene(text.str(), file.string(), file.parent_path());
 }
 
 }  // namespace purkinje

@@ -1,6 +1,7 @@
-// The one Embree adapter (Embree 3): every surface of the scene is an Embree
+// The one Embree adapter (Embree 3): every surface of the eyes is an Embree
 // user geometry with one primitive, whose callbacks intersect the exact
-// analytic shape of surfaces.h in double precision.
+// analytic shape of surfaces.h in double precision; every mesh is an
+// Embree triangle geometry whose hits are recomputed in double precision.
 //
 // Geometry. Eye frame (eye.h): origin at the anterior cornea's centre of
 // curvature, +z out along the optical axis. R = anterior radius, k = 1 + Q,
@@ -41,6 +42,9 @@
 //                     (from inside) instead of the background.
 // Outward normals: out of the eye, forward for the iris, pupil and face,
 // away from the centre of rotation for the lids.
+// Meshes (scene.meshes, world coordinates): one Embree triangle geometry
+// each, the vertices rounded to float for Embree only. Normal: the
+// triangle's front, (v1 - v0) x (v2 - v0), from the double vertices.
 //
 // Precision. Embree traces float rays. The callbacks ignore the float ray
 // and intersect the caller's double ray, which the query context carries
@@ -52,6 +56,18 @@
 // callback moves the ray origin to its closest approach to the shape's
 // local origin before solving, so quadratics never cancel metre-sized
 // terms: hit points are exact to ~1e-13 mm.
+//
+// Mesh hits. Embree's own (watertight, float) triangle test decides which
+// triangle a ray meets; an intersection filter then recomputes where, in
+// double precision from the mesh's own vertices (the t of Moller-Trumbore:
+// the ray's crossing of the triangle's plane), accepts it only inside the
+// double ray's interval and nearer than the closest hit so far, and, like
+// the user callbacks, hands Embree a rounded-up tfar. The filter does not
+// test the barycentric bounds again: along an edge shared by two triangles
+// Embree reports one of them, and a second, double test could reject both
+// and open a crack. Where a triangle's edge lies is thus known to float
+// precision (about 1e-7 of the coordinates, 0.06 um at 600 mm); where along
+// the ray the hit lies, to double precision.
 //
 // Ignoring the cornea (occluded_except_cornea): a flag in the query context
 // read by the cornea's callbacks; when this Embree build supports ray
@@ -86,6 +102,7 @@ const char* to_string(Surface s) {
     case Surface::pupil: return "pupil";
     case Surface::cornea_anterior: return "cornea_anterior";
     case Surface::cornea_posterior: return "cornea_posterior";
+    case Surface::mesh: return "mesh";
   }
   return "unknown";
 }
@@ -102,6 +119,7 @@ constexpr unsigned kCorneaMask = 1u;
 constexpr unsigned kOtherMask = 2u;
 
 class PlacedSurface;
+class PlacedMesh;
 
 // A local frame (eye or head), shared by the surfaces built in it. The
 // world-to-local map is kept as plain numbers so the hot path inlines it.
@@ -134,7 +152,10 @@ struct Lane {
   double t_lo = 0;
   double t_hi = 0;     // shrinks to the closest hit so far
   double t_shift = 0;  // the Embree ray starts at origin + t_shift direction
-  const PlacedSurface* surface = nullptr;  // the closest hit, or the occluder
+  // The closest hit so far, or the occluder: a surface or a mesh's triangle.
+  const PlacedSurface* surface = nullptr;
+  const PlacedMesh* mesh = nullptr;
+  unsigned triangle = 0;
   Point3 local_point;
   // The ray in the last frame used: an eye's surfaces share one frame, so
   // most callbacks skip the transform.
@@ -142,6 +163,8 @@ struct Lane {
   Point3 local_origin;  // the closest approach to the frame's origin
   Vector3 local_direction;
   double local_shift = 0;  // t of local_origin
+
+  bool found() const { return surface || mesh; }
 };
 
 // One Embree geometry: a shape placed in the world by its local frame.
@@ -231,6 +254,57 @@ class Placed final : public PlacedSurface {
   Shape shape_;
 };
 
+// One mesh: Embree finds the triangle in float, the hit is recomputed here
+// from the double vertices (see the file's comment).
+class PlacedMesh {
+ public:
+  PlacedMesh(int index, const Mesh& mesh)
+      : index_(index), vertices_(mesh.vertices), triangles_(mesh.triangles) {}
+
+  int index() const { return index_; }
+  const std::vector<Point3>& vertices() const { return vertices_; }
+  const std::vector<Triangle>& triangles() const { return triangles_; }
+
+  // Where the lane's ray crosses the plane of `triangle`, if in (t_lo, t_hi).
+  bool hit(const Lane& lane, unsigned triangle, double& t) const {
+    const Triangle& v = triangles_[triangle];
+    const Point3& p0 = vertices_[v[0]];
+    const Vector3 n = cross(vertices_[v[1]] - p0, vertices_[v[2]] - p0);
+    const double along = dot(lane.direction, n);
+    // Parallel to the plane, or a triangle without area: no crossing.
+    if (along == 0) return false;
+    const double r = dot(p0 - lane.origin, n) / along;
+    if (!(r > lane.t_lo && r < lane.t_hi)) return false;
+    t = r;
+    return true;
+  }
+
+  UnitVector3 normal(unsigned triangle) const {
+    const Triangle& v = triangles_[triangle];
+    const Point3& p0 = vertices_[v[0]];
+    return UnitVector3::normalize(cross(vertices_[v[1]] - p0, vertices_[v[2]] - p0));
+  }
+
+  // Padded as PlacedSurface::world_bounds, so that the scene's bounds clip
+  // no ray short of a triangle.
+  Box world_bounds() const {
+    Box b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    double extent = 0;
+    for (const Point3& p : vertices_) {
+      b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
+      b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+      extent = std::max({extent, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    }
+    const double pad = 1e-3 + 1e-6 * extent;
+    return {b.lo - Vector3{pad, pad, pad}, b.hi + Vector3{pad, pad, pad}};
+  }
+
+ private:
+  int index_;
+  std::vector<Point3> vertices_;
+  std::vector<Triangle> triangles_;
+};
+
 // Embree hands the context pointer back to the callbacks, so extending it
 // carries the double rays to them (the Embree 3 idiom; Embree 4 keeps it
 // as RTCRayQueryContext).
@@ -271,6 +345,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     if (!surface.hit(lane, t, local_point)) continue;
     lane.t_hi = t;
     lane.surface = &surface;
+    lane.mesh = nullptr;
     lane.local_point = local_point;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
     RTCHitN_geomID(hits, args->N, i) = args->geomID;
@@ -291,12 +366,49 @@ void occluded_callback(const RTCOccludedFunctionNArguments* args) {
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
-    if (lane.surface) continue;
+    if (lane.found()) continue;
     double t;
     Point3 local_point;
     if (!surface.hit(lane, t, local_point)) continue;
     lane.surface = &surface;
     RTCRayN_tfar(args->ray, args->N, i) = -INFINITY;  // Embree's "occluded"
+  }
+}
+
+// A mesh triangle that Embree's float test hit: kept when the double hit
+// is nearer than the closest so far (see the file's comment).
+void mesh_intersect_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* query = reinterpret_cast<const Query*>(args->context);
+  const auto& mesh = *static_cast<const PlacedMesh*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
+    const unsigned triangle = RTCHitN_primID(args->hit, args->N, i);
+    double t;
+    if (!mesh.hit(lane, triangle, t)) {
+      args->valid[i] = 0;
+      continue;
+    }
+    lane.t_hi = t;
+    lane.surface = nullptr;
+    lane.mesh = &mesh;
+    lane.triangle = triangle;
+    RTCRayN_tfar(args->ray, args->N, i) = embree_far(t - lane.t_shift);
+  }
+}
+
+void mesh_occluded_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* query = reinterpret_cast<const Query*>(args->context);
+  const auto& mesh = *static_cast<const PlacedMesh*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
+    double t;
+    if (lane.found() || !mesh.hit(lane, RTCHitN_primID(args->hit, args->N, i), t)) {
+      args->valid[i] = 0;
+      continue;
+    }
+    lane.mesh = &mesh;  // Embree ends the query on an accepted hit
   }
 }
 
@@ -330,6 +442,32 @@ std::string number(double v) {
   s.precision(10);
   s << v;
   return s.str();
+}
+
+// The scene reader's checks, repeated for meshes built in code: an index
+// out of range would read beyond the vertices, a vertex beyond float range
+// would break Embree's bounds.
+void check_mesh(int index, const Mesh& mesh) {
+  const auto fail = [&](const std::string& what) {
+    throw std::invalid_argument("RayTracer: meshes[" + std::to_string(index) + "] (" + mesh.name +
+                                "): " + what);
+  };
+  constexpr double kLimitMm = 1e6;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Point3& p = mesh.vertices[i];
+    if (!p.is_finite() || std::abs(p.x) > kLimitMm || std::abs(p.y) > kLimitMm || std::abs(p.z) > kLimitMm) {
+      fail("vertex " + std::to_string(i) + " (" + number(p.x) + ", " + number(p.y) + ", " + number(p.z) +
+           ") must be finite and within +-1e6 mm");
+    }
+  }
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (std::uint32_t v : mesh.triangles[i]) {
+      if (v >= mesh.vertices.size()) {
+        fail("triangle " + std::to_string(i) + " has vertex index " + std::to_string(v) + ", but the mesh has " +
+             std::to_string(mesh.vertices.size()) + " vertices");
+      }
+    }
+  }
 }
 
 using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
@@ -487,6 +625,7 @@ struct RayTracer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   SurfaceList surfaces;
+  std::vector<std::unique_ptr<PlacedMesh>> meshes;
   Box bounds{{0, 0, 0}, {0, 0, 0}};
   bool empty = true;
   bool masks = false;
@@ -563,7 +702,35 @@ struct RayTracer::Impl {
     lane.t_lo = eps;
     lane.t_hi = length - eps;
     run<true>(lane, skip_cornea);
-    return lane.surface != nullptr;
+    return lane.found();
+  }
+
+  // One Embree triangle geometry; its filters recompute hits in double.
+  void add_mesh(const PlacedMesh& mesh) {
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    check("creating a triangle geometry");
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertices().size()));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles().size()));
+    check("allocating a mesh's buffers");
+    for (std::size_t i = 0; i < mesh.vertices().size(); ++i) {
+      const Point3& p = mesh.vertices()[i];
+      vertices[3 * i + 0] = static_cast<float>(p.x);
+      vertices[3 * i + 1] = static_cast<float>(p.y);
+      vertices[3 * i + 2] = static_cast<float>(p.z);
+    }
+    for (std::size_t i = 0; i < mesh.triangles().size(); ++i) {
+      for (int k = 0; k < 3; ++k) indices[3 * i + k] = mesh.triangles()[i][k];
+    }
+    rtcSetGeometryUserData(geometry, const_cast<PlacedMesh*>(&mesh));
+    rtcSetGeometryIntersectFilterFunction(geometry, &mesh_intersect_filter);
+    rtcSetGeometryOccludedFilterFunction(geometry, &mesh_occluded_filter);
+    if (masks) rtcSetGeometryMask(geometry, kOtherMask);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(scene, geometry);
+    rtcReleaseGeometry(geometry);
+    check("adding a mesh");
   }
 };
 
@@ -574,6 +741,11 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     add_eyeball(impl.surfaces, index, scene.eyes[i]);
     if (scene.eyes[i].appearance().eyelids) add_lids(impl.surfaces, index, scene);
   }
+  for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
+    check_mesh(static_cast<int>(i), scene.meshes[i]);
+    if (scene.meshes[i].triangles.empty()) continue;  // nothing to meet
+    impl.meshes.push_back(std::make_unique<PlacedMesh>(static_cast<int>(i), scene.meshes[i]));
+  }
 
   impl.device = rtcNewDevice(nullptr);
   if (!impl.device) {
@@ -582,6 +754,12 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   }
   rtcSetDeviceErrorFunction(impl.device, &Impl::on_error, &impl);
   impl.masks = rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+  if (!impl.meshes.empty() &&
+      rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) == 0) {
+    throw std::runtime_error(
+        "Embree was built without intersection filters, which meshes need (their hits are recomputed in "
+        "double precision by a filter)");
+  }
   impl.scene = rtcNewScene(impl.device);
   impl.check("creating a scene");
   rtcSetSceneFlags(impl.scene, RTC_SCENE_FLAG_ROBUST);
@@ -608,9 +786,17 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
                  std::max(bounds.hi.z, b.hi.z)};
   }
+  for (const auto& mesh : impl.meshes) {
+    impl.add_mesh(*mesh);
+    const Box b = mesh->world_bounds();
+    bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
+                 std::min(bounds.lo.z, b.lo.z)};
+    bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
+                 std::max(bounds.hi.z, b.hi.z)};
+  }
   rtcCommitScene(impl.scene);
   impl.check("building the scene");
-  impl.empty = impl.surfaces.empty();
+  impl.empty = impl.surfaces.empty() && impl.meshes.empty();
   if (!impl.empty) {
     // A margin more, so that a float ray starting on this box starts
     // clear of every geometry's (padded) bounds.
@@ -631,12 +817,19 @@ Hit RayTracer::intersect(const Ray& ray) const {
   lane.t_lo = ray.t_min;
   lane.t_hi = ray.t_max;
   impl_->run<false>(lane, false);
-  if (!lane.surface) return hit;
-  hit.surface = lane.surface->kind();
-  hit.eye = lane.surface->eye();
+  if (!lane.found()) return hit;
+  if (lane.mesh) {
+    hit.surface = Surface::mesh;
+    hit.mesh = lane.mesh->index();
+    hit.triangle = static_cast<int>(lane.triangle);
+    hit.normal = lane.mesh->normal(lane.triangle);
+  } else {
+    hit.surface = lane.surface->kind();
+    hit.eye = lane.surface->eye();
+    hit.normal = lane.surface->world_normal(lane.local_point);
+  }
   hit.t = lane.t_hi;
   hit.point = ray.origin + ray.direction * lane.t_hi;
-  hit.normal = lane.surface->world_normal(lane.local_point);
   hit.front_face = dot(ray.direction, hit.normal) < 0;
   return hit;
 }

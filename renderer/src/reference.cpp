@@ -309,7 +309,8 @@ class ReferenceIntegrator final : public PathIntegrator {
       case Surface::none:
         return;
       case Surface::skin:
-      case Surface::sclera: {
+      case Surface::sclera:
+      case Surface::mesh: {
         const double albedo = diffuse_albedo(scene_, hit);
         if (albedo == 0) return;  // the eye's dark inside
         direct_light(hit, weight * albedo, rng, out);

@@ -64,6 +64,9 @@ std::vector<Light> lights_of(const Scene& scene, const Camera& camera) {
 PixelClass class_of(Surface s) {
   switch (s) {
     case Surface::skin: return PixelClass::skin;
+    // Glasses, hands, occluders: not part of the eye, so in the
+    // segmentation with what surrounds it.
+    case Surface::mesh: return PixelClass::skin;
     case Surface::sclera: return PixelClass::sclera;
     case Surface::iris: return PixelClass::iris;
     case Surface::pupil: return PixelClass::pupil;
@@ -86,6 +89,8 @@ double diffuse_albedo(const Scene& scene, const Hit& hit) {
   switch (hit.surface) {
     case Surface::skin:
       return scene.eyes[hit.eye].appearance().skin_albedo;
+    case Surface::mesh:
+      return scene.meshes[hit.mesh].albedo;
     case Surface::sclera:
       return hit.front_face ? scene.eyes[hit.eye].appearance().sclera_albedo : 0.0;
     case Surface::iris: {
@@ -185,6 +190,7 @@ class FastIntegrator final : public PathIntegrator {
         return;
       case Surface::skin:
       case Surface::sclera:
+      case Surface::mesh:
         if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, albedo * weight, out);
         return;
       case Surface::iris: {
@@ -302,6 +308,7 @@ class FastIntegrator final : public PathIntegrator {
     switch (hit.surface) {
       case Surface::skin:
       case Surface::sclera:
+      case Surface::mesh:
         if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, weight * albedo, add);
         return;
       case Surface::iris: {

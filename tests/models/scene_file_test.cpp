@@ -628,6 +628,127 @@ TEST(SceneFile, ExampleInTheFormatDocumentLoads) {
   EXPECT_EQ(scene.eyes[0].appearance().eyelids->opening, 0.8);
 }
 
+// ------------------------------------------------------------ meshes
+
+TEST(SceneFile, MeshIsFoundBesideTheSceneAndPlacedByScaleRotationAndPosition) {
+  const Scene scene = load_scene(kSourceDir / "tests/data/mesh_scene.json");
+  ASSERT_EQ(scene.meshes.size(), 1u);
+  const Mesh& mesh = scene.meshes[0];
+  EXPECT_EQ(mesh.name, "card");
+  EXPECT_DOUBLE_EQ(mesh.albedo, 0.3);
+  // The unit square, one quad: two triangles, in the file's order.
+  ASSERT_EQ(mesh.vertices.size(), 4u);
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  EXPECT_EQ(mesh.triangles[0], (Triangle{0, 1, 2}));
+  EXPECT_EQ(mesh.triangles[1], (Triangle{0, 2, 3}));
+  // world = [10, 20, 30] + Rz(90 deg) (2 v); Rz(90) takes (x, y, z) to (-y, x, z).
+  // (0,0,0) -> (10, 20, 30); (1,0,0) -> (0, 2, 0) -> (10, 22, 30);
+  // (1,1,0) -> (-2, 2, 0) -> (8, 22, 30); (0,1,0) -> (-2, 0, 0) -> (8, 20, 30).
+  const Point3 expected[] = {{10, 20, 30}, {10, 22, 30}, {8, 22, 30}, {8, 20, 30}};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_LT(distance(mesh.vertices[i], expected[i]), 1e-12) << "vertex " << i;
+  }
+}
+
+// A scene around one mesh entry, read with `folder` for relative files.
+std::string scene_with_mesh(const std::string& mesh) {
+  return R"({ "format": 1,
+    "cameras": [ { "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ],
+    "meshes": [ )" + mesh + " ] }";
+}
+
+std::string mesh_error(const std::string& mesh, const fs::path& folder = kSourceDir / "tests/data") {
+  try {
+    parse_scene(scene_with_mesh(mesh), "scene.json", folder);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SceneFile, MeshDefaultsAreNoTurnNoShiftUnitScaleAndANumberedName) {
+  const Scene scene = parse_scene(scene_with_mesh(R"({ "file": "meshes/square.obj", "albedo": 0 })"),
+                                  "scene.json", kSourceDir / "tests/data");
+  const Mesh& mesh = scene.meshes.at(0);
+  EXPECT_EQ(mesh.name, "mesh0");
+  EXPECT_EQ(mesh.albedo, 0.0);
+  EXPECT_EQ(mesh.vertices[2], Point3(1, 1, 0));  // as in the file
+  // Without meshes the scene has none.
+  EXPECT_TRUE(parse_scene(scene_with_eye(R"({ "position": { "cornea_center_mm": [0, 0, 600] },
+                                              "orientation": {} })"),
+                          "scene.json")
+                  .meshes.empty());
+}
+
+TEST(SceneFile, MeshFileMayBeAbsoluteAndIsReadRelativeToTheGivenFolderOtherwise) {
+  const std::string absolute = (kSourceDir / "tests/data/meshes/square.obj").string();
+  EXPECT_EQ(mesh_error(R"({ "file": ")" + absolute + R"(", "albedo": 0.5 })", kSourceDir / "docs"), "");
+  // From another folder the relative name finds nothing, and says where it looked.
+  EXPECT_EQ(mesh_error(R"({ "file": "meshes/square.obj", "albedo": 0.5 })", kSourceDir / "docs"),
+            "scene.json: meshes[0].file = \"meshes/square.obj\": no such file (looked for " +
+                (kSourceDir / "docs/meshes/square.obj").string() + ")");
+}
+
+TEST(SceneFile, MeshMistakesNameTheKeyTheValueAndTheRule) {
+  const std::map<std::string, std::string> bad = {
+      {R"({ "file": "meshes/square.obj", "albedo": -0.1 })", "meshes[0].albedo = -0.1: must be between 0 and 1"},
+      {R"({ "file": "meshes/square.obj" })",
+       "meshes[0].albedo: missing required key (its Lambertian albedo, 0 to 1)"},
+      {R"({ "albedo": 0.5 })",
+       "meshes[0].file: missing required key (a Wavefront OBJ file, relative to the scene file's folder)"},
+      {R"({ "file": "", "albedo": 0.5 })", "meshes[0].file = \"\": must not be empty"},
+      {R"({ "file": 3, "albedo": 0.5 })", "meshes[0].file = 3: must be a string"},
+      {R"({ "name": "", "file": "meshes/square.obj", "albedo": 0.5 })", "meshes[0].name = \"\": must not be empty"},
+      {R"({ "file": "meshes/square.obj", "albedo": 0.5, "scale": 0 })", "meshes[0].scale = 0: must be > 0"},
+      {R"({ "file": "meshes/square.obj", "albedo": 0.5, "position_mm": [0, 0] })",
+       "meshes[0].position_mm = [0, 0]: must be an array of 3 numbers"},
+      {R"({ "file": "meshes/square.obj", "albedo": 0.5, "rotation": [0, 0, 90] })",
+       "meshes[0].rotation = [0, 0, 90]: unknown key (valid keys here: albedo, file, name, position_mm, "
+       "rotation_vector_deg, scale)"},
+      // 1e300 x 1 mm is a coordinate no tracker sees, and would overflow distances.
+      {R"({ "file": "meshes/square.obj", "albedo": 0.5, "scale": 1e300 })",
+       "meshes[0].file = \"meshes/square.obj\": vertex 2 lands at [1e+300, 0, 0] mm, beyond +-1e+06 mm (1 km): "
+       "check scale and position_mm"},
+      {R"({ "file": "meshes/square.obj", "albedo": 0.5 }, { "file": "meshes/square.obj", "albedo": 0.5, "name": "mesh0" })",
+       "meshes[1].name = \"mesh0\": duplicate name (mesh names must be unique)"},
+      {"[]", "meshes[0] = []: must be an object"},
+  };
+  for (const auto& [mesh, expected] : bad) {
+    EXPECT_EQ(mesh_error(mesh), "scene.json: " + expected) << mesh;
+  }
+  // The list itself.
+  EXPECT_EQ(parse_error(R"({ "format": 1, "meshes": {},
+    "cameras": [ { "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ] })"),
+            "scene.json: meshes = {}: must be an array");
+}
+
+TEST(SceneFile, BundledGlassesSceneLoadsTheFrameInFrontOfTheEye) {
+  const Scene scene = load_scene(kSourceDir / "assets/scenes/remote_glasses.json");
+  EXPECT_EQ(scene.name, "remote_glasses");
+  ASSERT_EQ(scene.meshes.size(), 1u);
+  const Mesh& frame = scene.meshes[0];
+  EXPECT_EQ(frame.name, "glasses_frame");
+  // Two rims of 24 segments, each segment 4 quads, and a box for the
+  // bridge: (2 x 24 x 4 + 6) quads of 2 triangles; 2 x 24 x 4 + 8 vertices.
+  EXPECT_EQ(frame.triangles.size(), 396u);
+  EXPECT_EQ(frame.vertices.size(), 200u);
+  // The file's depth (z from -1.5 to 1.5) turned to world z 580 +- 1.5,
+  // its x from -59 to 59 (lens centre +-32, outer half-width 27) moved by 32.
+  for (const Point3& p : frame.vertices) {
+    EXPECT_GE(p.z, 578.5 - 1e-9);
+    EXPECT_LE(p.z, 581.5 + 1e-9);
+    EXPECT_GE(p.x, -27 - 1e-9);
+    EXPECT_LE(p.x, 91 + 1e-9);
+  }
+  // The eye sits behind the middle of the right rim's opening.
+  EXPECT_NEAR(scene.eyes[0].cornea_center().x, 0, 1e-12);
+  EXPECT_GT(scene.eyes[0].corneal_apex().z - 581.5, 10);
+}
+
 // One mistake per file; the expected message for each. A file without an
 // entry here, or an entry without a file, fails MalformedFilesAllHaveExpectations.
 const std::map<std::string, std::string> kMalformed = {
@@ -659,6 +780,20 @@ const std::map<std::string, std::string> kMalformed = {
     {"light_inside_eye", "illuminators[0].position_mm = [0, 0, 610]: lies inside the sclera sphere"},
     {"limbus_beyond_conicoid", "eyes[0].cornea.limbus_radius_mm = 5.9: must be < radius_mm / sqrt(1 + asphericity)"},
     {"look_at_equals_position", "cameras[0].look_at_mm = [0, 0, 0]: must differ from position_mm"},
+    {"mesh_albedo_above_one", "meshes[0].albedo = 1.2: must be between 0 and 1"},
+    {"mesh_face_index_out_of_range",
+     "meshes[0].file = \"meshes/face_index_out_of_range.obj\": line 12: face index 40 out of range (file has 8 "
+     "vertices)"},
+    {"mesh_file_is_a_folder", "meshes[0].file = \"meshes\": is a directory, not an OBJ file"},
+    {"mesh_garbage", "meshes[0].file = \"meshes/garbage.obj\": line 1: unknown statement \"This\""},
+    {"mesh_missing_file", "meshes[0].file = \"meshes/no_such.obj\": no such file (looked for "},
+    {"mesh_no_faces", "meshes[0].file = \"meshes/no_faces.obj\": no faces (no \"f\" statement)"},
+    {"mesh_non_finite_vertex",
+     "meshes[0].file = \"meshes/non_finite_vertex.obj\": line 3: vertex coordinate \"nan\" is not a finite "
+     "number"},
+    {"mesh_unknown_key",
+     "meshes[0].colour = 0.3: unknown key (valid keys here: albedo, file, name, position_mm, "
+     "rotation_vector_deg, scale)"},
     {"missing_eye_position", "eyes[0].position: missing required key; found \"positon\""},
     {"missing_pixel_pitch", "cameras[0].pixel_pitch_mm: missing required key"},
     {"negative_cornea_radius", "eyes[0].cornea.radius_mm = -7.8: must be > 0"},

@@ -433,6 +433,9 @@ Hit follow_through(const RayTracer& tracer, const Ray& ray, bool lids, int trial
         EXPECT_TRUE(lids) << "trial " << trial;
         EXPECT_FALSE(inside) << "trial " << trial << ": skin inside the eye";
         break;
+      case Surface::mesh:
+        ADD_FAILURE() << "trial " << trial << ": these scenes have no meshes";
+        break;
       case Surface::none:
         break;
     }
@@ -656,6 +659,157 @@ TEST(RayTracer, OccludedSeesEverySurfaceAndTheExceptionIgnoresOnlyTheCornea) {
   EXPECT_FALSE(tracer2.occluded_except_cornea(camera, in_stroma));
   EXPECT_FALSE(tracer2.occluded_except_cornea(camera, two_surface.pupil_center() + Vector3{0, 0, -0.01}));
   EXPECT_TRUE(tracer2.occluded(camera, two_surface.pupil_center() + Vector3{0, 0, -0.01}));
+}
+
+// ---------------------------------------------------------------------------
+// Meshes.
+
+// v0 = (0, 0, 100), v1 = (10, 0, 100), v2 = (0, 10, 110): the plane
+// z = 100 + y. e1 = (10, 0, 0), e2 = (0, 10, 10), e1 x e2 = (0, -100, 100),
+// so the front normal is (0, -1, 1) / sqrt(2). A second triangle lies
+// beside it, (20, 0, 100), (30, 0, 100), (20, 10, 100), in the plane z = 100.
+Mesh two_triangles() {
+  Mesh mesh;
+  mesh.name = "test";
+  mesh.vertices = {{0, 0, 100}, {10, 0, 100}, {0, 10, 110}, {20, 0, 100}, {30, 0, 100}, {20, 10, 100}};
+  mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+  mesh.albedo = 0.5;
+  return mesh;
+}
+
+Scene scene_of(std::vector<Eye> eyes, std::vector<Mesh> meshes) {
+  Scene scene = scene_of(std::move(eyes));
+  scene.meshes = std::move(meshes);
+  return scene;
+}
+
+TEST(RayTracer, RayMeetsAMeshTriangleAtTheHandComputedPointAndNormal) {
+  const RayTracer tracer(scene_of({}, {two_triangles()}));
+  // Along +z through (2, 3): z = 100 + 3 = 103. Barycentric (0.2, 0.3): inside.
+  // From 5 m away, where float would be 0.5 um off.
+  const Hit hit = tracer.intersect(Ray{{2, 3, -5000}, UnitVector3::unit_z()});
+  ASSERT_EQ(hit.surface, Surface::mesh);
+  EXPECT_STREQ(to_string(hit.surface), "mesh");
+  EXPECT_EQ(hit.mesh, 0);
+  EXPECT_EQ(hit.triangle, 0);
+  EXPECT_EQ(hit.eye, -1);
+  EXPECT_NEAR(hit.t, 5103, 1e-10);
+  expect_point_near(hit.point, {2, 3, 103}, 1e-12);
+  expect_direction_near(hit.normal, Vector3{0, -1, 1} / std::sqrt(2.0), 1e-15);
+  EXPECT_FALSE(hit.front_face);  // +z meets the side facing away from (0, -1, 1)
+
+  // Obliquely, from the origin toward (2, 3, 103): t = |(2, 3, 103)| = sqrt(10622).
+  const Hit oblique = tracer.intersect(ray_to({0, 0, 0}, {2, 3, 103}));
+  ASSERT_EQ(oblique.surface, Surface::mesh);
+  EXPECT_NEAR(oblique.t, std::sqrt(10622.0), 1e-12);
+  expect_point_near(oblique.point, {2, 3, 103}, 1e-12);
+
+  // The second triangle, from the front (-z toward +z is its back: e1 x e2 = +z).
+  const Hit second = tracer.intersect(Ray{{22, 3, 300}, -UnitVector3::unit_z()});
+  ASSERT_EQ(second.surface, Surface::mesh);
+  EXPECT_EQ(second.triangle, 1);
+  EXPECT_NEAR(second.t, 200, 1e-12);
+  EXPECT_TRUE(second.front_face);
+  expect_direction_near(second.normal, {0, 0, 1}, 1e-15);
+
+  // Beside both, or past the hypotenuse (barycentric 0.6 + 0.6 > 1): nothing.
+  EXPECT_EQ(tracer.intersect(Ray{{15, 3, 0}, UnitVector3::unit_z()}).surface, Surface::none);
+  EXPECT_EQ(tracer.intersect(Ray{{6, 6, 0}, UnitVector3::unit_z()}).surface, Surface::none);
+}
+
+TEST(RayTracer, MeshBlocksShadowRaysWithOrWithoutTheCornea) {
+  const RayTracer tracer(scene_of({}, {two_triangles()}));
+  EXPECT_TRUE(tracer.occluded({2, 3, 0}, {2, 3, 200}));
+  EXPECT_TRUE(tracer.occluded_except_cornea({2, 3, 0}, {2, 3, 200}));
+  EXPECT_TRUE(tracer.occluded({2, 3, 200}, {2, 3, 0}));
+  EXPECT_FALSE(tracer.occluded({15, 3, 0}, {15, 3, 200}));  // between the triangles
+  // A segment may start or end on the triangle, as on the analytic surfaces.
+  EXPECT_FALSE(tracer.occluded({2, 3, 0}, {2, 3, 103}));
+  EXPECT_FALSE(tracer.occluded({2, 3, 103}, {2, 3, 200}));
+  EXPECT_FALSE(tracer.occluded({2, 3, 0}, {2, 3, 103 - 1e-6}));
+}
+
+TEST(RayTracer, TheNearerOfAMeshAndAnEyeIsHitFirstToDoublePrecision) {
+  // The keratometric apex on the axis at z = 600 - 7.8 = 592.2. A large
+  // square across the axis a nanometre in front of it, then behind it.
+  const auto square_at = [](double z) {
+    Mesh m;
+    m.vertices = {{-50, -50, z}, {50, -50, z}, {50, 50, z}, {-50, 50, z}};
+    m.triangles = {{0, 1, 2}, {0, 2, 3}};
+    return m;
+  };
+  const Eye eye = facing_camera(keratometric_eye());
+  const Ray axis{{0, 0, 0}, UnitVector3::unit_z()};
+  {
+    const RayTracer tracer(scene_of({eye}, {square_at(592.2 - 1e-6)}));
+    const Hit hit = tracer.intersect(axis);
+    EXPECT_EQ(hit.surface, Surface::mesh);
+    EXPECT_NEAR(hit.t, 592.2 - 1e-6, 1e-12);
+    // Past the square: the cornea.
+    Ray beyond = axis;
+    beyond.t_min = hit.t + 1e-7;
+    const Hit cornea = tracer.intersect(beyond);
+    EXPECT_EQ(cornea.surface, Surface::cornea_anterior);
+    EXPECT_NEAR(cornea.t, 592.2, 1e-12);
+    EXPECT_EQ(cornea.eye, 0);
+    EXPECT_EQ(cornea.mesh, -1);
+  }
+  {
+    const RayTracer tracer(scene_of({eye}, {square_at(592.2 + 1e-6)}));
+    EXPECT_EQ(tracer.intersect(axis).surface, Surface::cornea_anterior);
+    // Nothing in front of the apex is hidden by the square behind it.
+    EXPECT_FALSE(tracer.occluded({0, 0, 0}, {0, 0, 592.2 - 1e-4}));
+    EXPECT_FALSE(tracer.occluded_except_cornea({0, 0, 0}, {0, 0, 592.2}));
+  }
+}
+
+TEST(RayTracer, RejectsMeshesWithIndicesOutOfRangeOrNonFiniteVertices) {
+  Mesh bad = two_triangles();
+  bad.name = "frame";
+  bad.triangles.push_back({0, 1, 6});
+  try {
+    RayTracer tracer(scene_of({}, {two_triangles(), bad}));
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "RayTracer: meshes[1] (frame): triangle 2 has vertex index 6, but the mesh has 6 vertices");
+  }
+  bad = two_triangles();
+  bad.vertices[4].y = NAN;
+  EXPECT_THROW(RayTracer(scene_of({}, {bad})), std::invalid_argument);
+  bad.vertices[4].y = 2e6;  // beyond 1 km
+  EXPECT_THROW(RayTracer(scene_of({}, {bad})), std::invalid_argument);
+  // A mesh without triangles is nothing to meet, not an error.
+  Mesh empty;
+  const RayTracer tracer(scene_of({}, {empty}));
+  EXPECT_EQ(tracer.intersect(Ray{{2, 3, 0}, UnitVector3::unit_z()}).surface, Surface::none);
+}
+
+TEST(RayTracer, RaysAcrossASharedEdgeNeverSlipThroughAMesh) {
+  // A 2 x 2 grid of squares, 8 triangles sharing edges and a centre
+  // vertex: rays aimed exactly at the shared edges and vertices must hit.
+  Mesh grid;
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) grid.vertices.push_back({-10.0 + 10 * i, -10.0 + 10 * j, 300});
+  }
+  for (std::uint32_t j = 0; j < 2; ++j) {
+    for (std::uint32_t i = 0; i < 2; ++i) {
+      const std::uint32_t a = 3 * j + i;
+      grid.triangles.push_back({a, a + 1, a + 4});
+      grid.triangles.push_back({a, a + 4, a + 3});
+    }
+  }
+  const RayTracer tracer(scene_of({}, {grid}));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> along(-9.99, 9.99);
+  for (int k = 0; k < 2000; ++k) {
+    // On the edges x = 0, y = 0 and the diagonals x = y, through the centre.
+    const double s = along(rng);
+    const Point3 target = k % 3 == 0 ? Point3{0, s, 300} : k % 3 == 1 ? Point3{s, 0, 300} : Point3{s, s, 300};
+    const Hit hit = tracer.intersect(ray_to({1, -2, 0}, target));
+    ASSERT_EQ(hit.surface, Surface::mesh) << k;
+    expect_point_near(hit.point, target, 1e-10);
+  }
 }
 
 // ---------------------------------------------------------------------------

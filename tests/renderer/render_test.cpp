@@ -116,6 +116,140 @@ TEST(RenderRadiometry, LambertianSkinMatchesClosedForm) {
   RecordProperty("worst_relative_error", std::to_string(worst));
 }
 
+// A square of half-size `half` centred on `center`, facing along `normal`
+// (its triangles' front normal, (v1 - v0) x (v2 - v0)).
+Mesh square(const Point3& center, const UnitVector3& normal, double half, double albedo) {
+  const Vector3 helper = std::abs(normal.y()) < 0.9 ? Vector3{0, 1, 0} : Vector3{1, 0, 0};
+  const Vector3 u = UnitVector3::normalize(cross(helper, normal)).vector() * half;
+  const Vector3 v = cross(normal, UnitVector3::normalize(u)) * half;  // u, v, normal right-handed
+  Mesh m;
+  m.name = "square";
+  m.vertices = {center - u - v, center + u - v, center + u + v, center - u + v};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}};
+  m.albedo = albedo;
+  return m;
+}
+
+// A mesh is Lambertian like the skin: a plane of albedo rho facing a
+// light of intensity I at distance d has radiance rho I cos(theta) / (pi d^2).
+TEST(RenderRadiometry, LambertianMeshMatchesClosedForm) {
+  Scene scene = bundled("remote");
+  Sensor sensor = scene.cameras[0].sensor();
+  sensor.noise = false;
+  sensor.psf_sigma_px = 0;
+  scene.cameras[0] = with_sensor(scene.cameras[0], sensor);
+  scene.eyes.clear();
+  Illuminator led;
+  led.name = "led";
+  led.position = {0, 0, 100};
+  led.radiant_intensity_w_sr = 0.3;
+  scene.illuminators = {led};
+  // The plane z = 500 facing the camera and the light, 400 mm from it.
+  scene.meshes = {square({0, 0, 500}, -UnitVector3::unit_z(), 200, 0.3)};
+  RenderOptions options;
+  options.samples_per_pixel = 4;
+  options.region = PixelRegion{300, 220, 340, 260};
+  const RenderResult r = render(scene, 0, options);
+
+  // By hand at the centre: 0.3 x 0.3 W/sr / (pi x 0.4^2 m^2) = 0.179049 W m^-2 sr^-1.
+  EXPECT_NEAR(r.radiance.at(320, 240) / 0.179049, 1.0, 0.01);
+  // Every pixel, from its own point on the plane.
+  const Camera& camera = scene.cameras[0];
+  const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
+  double worst = 0;
+  for (int y = 220; y < 260; ++y) {
+    for (int x = 300; x < 340; ++x) {
+      ASSERT_EQ(aov(r, "skin").at(x, y), 1.0f) << "a mesh is segmented with the skin";
+      ASSERT_EQ(aov(r, "id").at(x, y), 1.0f);
+      const UnitVector3 dir = camera.back_project({double(x), double(y)});
+      const double z = aov(r, "depth").at(x, y);
+      EXPECT_NEAR(z, 500, 1e-3);
+      const Point3 p = camera.center() + dir * (z / dot(dir, axis));
+      const Vector3 to = led.position - p;
+      const double expected = 0.3 * 0.3 * (-to.z / to.norm()) / (std::numbers::pi * to.squared_norm()) * 1e6;
+      worst = std::max(worst, std::abs(r.radiance.at(x, y) / expected - 1));
+    }
+  }
+  EXPECT_LT(worst, 0.01);
+  RecordProperty("worst_relative_error", std::to_string(worst));
+
+  // Lit on either side: the same plane wound the other way looks the same.
+  scene.meshes = {square({0, 0, 500}, UnitVector3::unit_z(), 200, 0.3)};
+  options.region = PixelRegion{318, 238, 322, 242};
+  EXPECT_NEAR(render(scene, 0, options).radiance.at(320, 240), r.radiance.at(320, 240), 1e-6);
+  // But opaque: a light behind it leaves the side the camera sees dark.
+  scene.illuminators[0].position = {0, 0, 900};
+  EXPECT_EQ(render(scene, 0, options).radiance.at(320, 240), 0.0f);
+}
+
+// A mesh appears in the cornea's mirror image: behind the camera, a lit
+// plane adds R_F L to the corneal apex's pixel, R_F the Fresnel
+// reflectance at normal incidence, L the plane's radiance where the
+// reflected ray meets it.
+TEST(RenderReflection, AMeshAppearsInTheCorneasReflection) {
+  Intrinsics k;
+  k.width = 641;
+  k.height = 481;
+  k.fx = k.fy = 20000;  // a pixel covers 0.03 mm of the cornea: the reflection barely spreads
+  k.cx = 320;
+  k.cy = 240;
+  Sensor sensor;
+  sensor.noise = false;
+  sensor.psf_sigma_px = 0;
+  Scene scene;
+  scene.name = "mirror";
+  scene.cameras = {Camera("cam", k, Distortion{}, Pose{}, sensor)};
+  scene.eyes = {Eye::with_cornea_center(keratometric_eye(), {0, 0, 600}, -UnitVector3::unit_z())};
+  for (double x : {-100.0, 100.0}) {
+    Illuminator led;
+    led.name = x < 0 ? "left" : "right";
+    led.position = {x, 0, 0};
+    led.radiant_intensity_w_sr = 0.3;
+    scene.illuminators.push_back(led);
+  }
+  RenderOptions options;
+  options.samples_per_pixel = 16;
+  options.region = PixelRegion{320, 240, 321, 241};
+  const double without = render(scene, 0, options).radiance.at(320, 240);
+  scene.meshes = {square({0, 0, -50}, UnitVector3::unit_z(), 300, 0.5)};
+  const double with = render(scene, 0, options).radiance.at(320, 240);
+
+  // R_F = ((1.3375 - 1) / (1.3375 + 1))^2 = 0.0208471. The ray reflected
+  // at the apex returns along the axis to (0, 0, -50): each LED is
+  // d^2 = 100^2 + 50^2 = 12500 mm^2 away at cos(theta) = 50 / sqrt(12500) = 0.447214,
+  // so L = 0.5 x 2 x 0.3 x 0.447214 / (pi x 12500) x 1e6 = 3.41645 W m^-2 sr^-1.
+  const double expected = 0.0208471 * 3.41645;
+  EXPECT_NEAR((with - without) / expected, 1.0, 0.005) << "with " << with << ", without " << without;
+}
+
+// apply_visibility asks the ray tracer whether anything lies between a
+// light and its glint: a mesh there hides the glint, in the labels and
+// in the image.
+TEST(RenderLabels, AMeshBetweenALightAndItsGlintMarksTheGlintOccluded) {
+  Scene scene = bundled("remote");
+  const SceneTruth truth = compute_truth(scene);
+  ASSERT_EQ(truth.views[0].glints.size(), 2u);
+  for (const GlintTruth& g : truth.views[0].glints) ASSERT_EQ(g.status, PathStatus::ok);
+  // A 10 mm card half way from the left LED to its glint, across the path.
+  const Point3 light = scene.illuminators[0].position;
+  const Point3 glint = truth.views[0].glints[0].reflection.point;
+  const Point3 middle = light + (glint - light) * 0.5;
+  scene.meshes = {square(middle, UnitVector3::normalize(light - glint), 5, 0.3)};
+
+  RenderOptions options;
+  options.samples_per_pixel = 1;
+  options.noise = false;
+  options.iris_cache_resolution = 5;
+  options.region = around(truth.views[0].glints[0].pixel, 6, scene.cameras[0]);
+  const RenderResult r = render(scene, 0, options);
+  EXPECT_EQ(r.truth.views[0].glints[0].status, PathStatus::occluded);
+  EXPECT_EQ(r.truth.views[0].glints[1].status, PathStatus::ok);
+  ASSERT_EQ(r.glints.size(), 2u);
+  EXPECT_EQ(r.glints[0].status, PathStatus::occluded);
+  EXPECT_EQ(r.glints[0].electrons, 0.0);
+  EXPECT_GT(r.glints[1].electrons, 0.0);
+}
+
 // ------------------------------------------------ glints agree with labels
 
 // Intensity-weighted centroid of the linear image within `radius` px of a

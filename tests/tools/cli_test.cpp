@@ -265,6 +265,40 @@ TEST_F(Cli, RenderOfABadSceneExitsOneAndWritesNothing) {
   EXPECT_NE(err().find("no_such_camera"), std::string::npos) << err();
 }
 
+// A bad mesh is found when the scene is read, before any pixel: exit 1,
+// the file, key, value and rule on standard error, nothing in the folder.
+TEST_F(Cli, RenderWithAMissingOrCorruptMeshExitsOneAndWritesNothing) {
+  const fs::path malformed = kSourceDir / "tests/data/malformed";
+  const std::pair<const char*, const char*> cases[] = {
+      {"mesh_missing_file.json", ": meshes[0].file = \"meshes/no_such.obj\": no such file (looked for "},
+      {"mesh_face_index_out_of_range.json",
+       ": meshes[0].file = \"meshes/face_index_out_of_range.obj\": line 12: face index 40 out of range "
+       "(file has 8 vertices)"},
+      {"mesh_garbage.json", ": meshes[0].file = \"meshes/garbage.obj\": line 1: unknown statement \"This\""},
+  };
+  for (const auto& [name, message] : cases) {
+    const fs::path scene = malformed / name;
+    EXPECT_EQ(run("render " + quoted(scene.string()) + " -o " + quoted(output_dir_.string()) + " --samples 1"), 1)
+        << name << "\n" << err();
+    EXPECT_NE(err().find(scene.string() + message), std::string::npos) << err();
+    EXPECT_TRUE(output_dir_entries().empty()) << name;
+    EXPECT_TRUE(out().empty()) << name << ": " << out();
+  }
+}
+
+TEST_F(Cli, RendersTheGlassesSceneWithItsFrame) {
+  const fs::path scene = kSourceDir / "assets/scenes/remote_glasses.json";
+  ASSERT_EQ(run("render " + quoted(scene.string()) + " -o " + quoted(output_dir_.string()) + " --samples 1"), 0)
+      << err();
+  std::vector<std::string> names = output_dir_entries();
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"remote_glasses_cam0.exr", "remote_glasses_cam0.json",
+                                             "remote_glasses_cam0.png"}));
+  // The frame leaves both glints in view.
+  const json labels = json::parse(read(output_dir_ / "remote_glasses_cam0.json"));
+  for (const json& glint : labels["views"][0]["glints"]) EXPECT_EQ(glint["status"], "ok") << glint.dump();
+}
+
 // Two cameras whose names differ only in characters that file names drop
 // would overwrite each other's files: refused before anything is written.
 TEST_F(Cli, RenderRefusesCamerasThatWouldShareFileNames) {

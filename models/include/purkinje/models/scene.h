@@ -6,6 +6,7 @@
 #include "purkinje/models/camera.h"
 #include "purkinje/models/eye.h"
 #include "purkinje/models/illuminator.h"
+#include "purkinje/models/mesh.h"
 
 namespace purkinje {
 
@@ -14,6 +15,7 @@ struct Scene {
   std::vector<Camera> cameras;
   std::vector<Eye> eyes;
   std::vector<Illuminator> illuminators;
+  std::vector<Mesh> meshes;  // optional geometry beside the eyes (glasses, occluders)
 };
 
 }  // namespace purkinje

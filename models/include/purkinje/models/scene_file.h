@@ -19,9 +19,12 @@ class SceneError : public std::runtime_error {
 
 inline constexpr int kSceneFormatVersion = 1;
 
-// Reads and validates a scene file; throws SceneError.
+// Reads and validates a scene file, and the mesh files it names (relative
+// to the scene file's folder); throws SceneError.
 Scene load_scene(const std::filesystem::path& file);
-// Parses scene text; `source_name` is used in error messages.
-Scene parse_scene(const std::string& text, const std::string& source_name);
+// Parses scene text; `source_name` is used in error messages, and relative
+// mesh file names are resolved against `folder` (empty: the current one).
+Scene parse_scene(const std::string& text, const std::string& source_name,
+                  const std::filesystem::path& folder = {});
 
 }  // namespace purkinje

@@ -12,7 +12,9 @@
 // the gap to the cornea's edge) and, when the eye has eyelids, the lids
 // (a sphere about the centre of rotation, minus the palpebral opening) and
 // the skin around them (a plane facing forward with a hole for the lids,
-// and the rest of the lid sphere behind it as the eye's socket).
+// and the rest of the lid sphere behind it as the eye's socket). Each of
+// the scene's meshes is an Embree triangle geometry whose hits are
+// recomputed in double precision from the mesh's own vertices.
 // Geometry and precision are documented in src/ray_tracer.cpp.
 
 #include <limits>
@@ -31,6 +33,7 @@ enum class Surface : unsigned char {
   pupil,
   cornea_anterior,
   cornea_posterior,
+  mesh,      // a triangle of one of the scene's meshes
 };
 const char* to_string(Surface s);
 
@@ -43,17 +46,22 @@ struct Ray {
 
 struct Hit {
   Surface surface = Surface::none;
-  int eye = -1;             // index into scene.eyes
+  int eye = -1;             // index into scene.eyes (-1 for meshes)
+  int mesh = -1;            // index into scene.meshes (Surface::mesh only)
+  int triangle = -1;        // index into that mesh's triangles
   double t = 0;             // distance along the ray, mm
   Point3 point;             // world, recomputed in double precision
-  UnitVector3 normal = UnitVector3::unit_z();  // outward (out of the eye; toward the front for skin and iris)
+  // Outward: out of the eye; toward the front for skin and iris; for a
+  // mesh, the triangle's front, (v1 - v0) x (v2 - v0).
+  UnitVector3 normal = UnitVector3::unit_z();
   bool front_face = true;   // the ray meets the side `normal` points to
 };
 
 class RayTracer {
  public:
   // Throws std::runtime_error on an Embree error, std::invalid_argument
-  // (naming eyes[i]) for an eye whose surfaces cannot be built or sealed.
+  // (naming eyes[i] or meshes[i]) for an eye whose surfaces cannot be built
+  // or sealed, or a mesh with an index out of range or a non-finite vertex.
   explicit RayTracer(const Scene& scene);
   ~RayTracer();
   RayTracer(const RayTracer&) = delete;
@@ -62,10 +70,11 @@ class RayTracer {
   // The closest hit with t_min < t < t_max. Throws std::invalid_argument
   // for a non-finite origin or t_min < 0; an empty interval hits nothing.
   Hit intersect(const Ray& ray) const;
-  // Whether any surface lies on the open segment between two points (both
-  // ends trimmed by 1e-6 of the length + 1e-9 mm, so a segment may start or
-  // end on a surface). The cornea counts: light does not pass it without
-  // refracting. Throws std::invalid_argument for non-finite points.
+  // Whether any surface (meshes included) lies on the open segment between
+  // two points (both ends trimmed by 1e-6 of the length + 1e-9 mm, so a
+  // segment may start or end on a surface). The cornea counts: light does
+  // not pass it without refracting. Throws std::invalid_argument for
+  // non-finite points.
   bool occluded(const Point3& from, const Point3& to) const;
   // As occluded(), ignoring the anterior and posterior cornea (for a path
   // whose refraction the caller handles, e.g. from a light to the cornea).

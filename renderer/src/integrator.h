@@ -81,9 +81,18 @@ InterfaceCrossing cross_interface(const Scene& scene, const Ray& ray, const Hit&
 // `camera_center`; see docs/rendering.md.
 double bright_pupil_radiance(const Eye& eye, const Point3& light, const Point3& camera_center,
                              double irradiance_w_m2);
+// Adds, for a pupil hit, every light's bright-pupil radiance times
+// `weight`; `irradiance(k)` is the irradiance there from light k (from
+// whichever estimate the integrator keeps).
+template <typename IrradianceOf>
+void add_bright_pupil(const Eye& eye, const std::vector<Light>& lights, const Point3& camera_center,
+                      double weight, const IrradianceOf& irradiance, Contribution& out) {
+  for (std::size_t k = 0; k < lights.size(); ++k) {
+    out.add(weight * bright_pupil_radiance(eye, lights[k].position, camera_center, irradiance(k)), lights[k]);
+  }
+}
 
-// The brute-force reference (reference.cpp). Throws std::invalid_argument
-// for options it cannot honour.
+// The brute-force reference (reference.cpp); render() has checked the options.
 std::unique_ptr<PathIntegrator> make_reference_integrator(const Scene& scene, const Camera& camera,
                                                           const RayTracer& tracer,
                                                           const RenderOptions& options);

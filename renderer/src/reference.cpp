@@ -31,8 +31,6 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
-#include <stdexcept>
-#include <string>
 #include <vector>
 
 #include "integrator.h"
@@ -327,12 +325,8 @@ class ReferenceIntegrator final : public PathIntegrator {
       }
       case Surface::pupil:
         // Only the fundus's retro-reflection comes back out of the pupil.
-        for (std::size_t k = 0; k < lights_.size(); ++k) {
-          const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point);
-          out.add(weight * bright_pupil_radiance(scene_.eyes[hit.eye], lights_[k].position,
-                                                 camera_.center(), e),
-                  lights_[k]);
-        }
+        add_bright_pupil(scene_.eyes[hit.eye], lights_, camera_.center(), weight,
+                         [&](std::size_t k) { return iris_[hit.eye][k].irradiance_w_m2(hit.point); }, out);
         return;
       case Surface::cornea_anterior:
       case Surface::cornea_posterior: {

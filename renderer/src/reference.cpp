@@ -293,7 +293,8 @@ class ReferenceIntegrator final : public PathIntegrator {
     }
   }
 
-  void sample(const Ray& ray, std::uint64_t path, Contribution& out, PrimaryRecord& record) const override {
+  void sample(const Ray& ray, const Pixel&, std::uint64_t path, Contribution& out,
+              PrimaryRecord& record) const override {
     PathSampler rng(seed_, path);
     trace(ray, 0, 0, 1.0, rng, out, &record);
   }

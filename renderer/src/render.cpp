@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "diffuse_cache.h"
 #include "integrator.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/sensor_model.h"
@@ -47,7 +48,18 @@ constexpr double kMinBranchWeight = 1e-4;
 constexpr double kFundusLobeRad = 1.5 * std::numbers::pi / 180;
 
 // Random-number streams (see uniform01): one per purpose.
-enum Stream : std::uint64_t { kJitterStream = 1, kSensorStream = 2 };
+enum Stream : std::uint64_t {
+  kJitterStream = 1,
+  kSensorStream = 2,
+  kCacheNodeStream = 3,
+  kCacheMissStream = 4,
+};
+
+// The diffuse cache (diffuse_cache.h): node spacing, gather rays per node,
+// and the fewer rays gathered where no node serves a point.
+constexpr int kDiffuseCacheSpacingPx = 8;
+constexpr int kDiffuseCacheRays = 64;
+constexpr int kDiffuseMissRays = 16;
 
 }  // namespace
 
@@ -88,7 +100,9 @@ void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* 
 double diffuse_albedo(const Scene& scene, const Hit& hit) {
   switch (hit.surface) {
     case Surface::skin:
-      return scene.eyes[hit.eye].appearance().skin_albedo;
+      // The lids' inner side: real lids rest on the globe, so what lies
+      // behind their margins is dark, not a lit gap between lid and eye.
+      return hit.front_face ? scene.eyes[hit.eye].appearance().skin_albedo : 0.0;
     case Surface::mesh:
       return scene.meshes[hit.mesh].albedo;
     case Surface::sclera:
@@ -160,7 +174,7 @@ class FastIntegrator final : public PathIntegrator {
  public:
   FastIntegrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
                  const RenderOptions& options)
-      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)) {
+      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)), seed_(options.seed) {
     const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
       return !tracer_.occluded_except_cornea(light, cornea);
     };
@@ -172,26 +186,47 @@ class FastIntegrator final : public PathIntegrator {
       }
       build_iris_indirect(static_cast<int>(e));
     }
+    const Intrinsics& k = camera.intrinsics();
+    diffuse_ = std::make_unique<DiffuseCache>(
+        camera, options.region.value_or(PixelRegion{0, 0, k.width, k.height}), kDiffuseCacheSpacingPx,
+        lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
+        [this](const DiffusePoint& p, std::size_t node, double* e) {
+          gather_hemisphere(p.point, p.normal, kDiffuseCacheRays, kCacheNodeStream, node, e);
+        });
   }
 
-  void sample(const Ray& ray, std::uint64_t, Contribution& out, PrimaryRecord& record) const override {
-    trace(ray, 0, 1.0, out, &record);
+  void sample(const Ray& ray, const Pixel& image_position, std::uint64_t path, Contribution& out,
+              PrimaryRecord& record) const override {
+    const Primary primary{&record, image_position, path};
+    trace(ray, 0, 1.0, out, &primary);
   }
 
  private:
+  // What the transmitted chain of a camera ray carries.
+  struct Primary {
+    PrimaryRecord* record;
+    Pixel image_position;
+    std::uint64_t path;
+  };
+
   // Radiance arriving along `ray`, times `weight`, added to `out`.
-  // `record` is filled along the transmitted chain of the primary path.
-  void trace(const Ray& ray, int depth, double weight, Contribution& out,
-             PrimaryRecord* record) const {
+  // `primary` is given along the transmitted chain of a camera ray.
+  void trace(const Ray& ray, int depth, double weight, Contribution& out, const Primary* primary) const {
     const Hit hit = tracer_.intersect(ray);
-    record_hit(hit, camera_, depth, record);
+    record_hit(hit, camera_, depth, primary ? primary->record : nullptr);
     switch (hit.surface) {
       case Surface::none:
         return;
       case Surface::skin:
       case Surface::sclera:
       case Surface::mesh:
-        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, albedo * weight, out);
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
+          direct_light(hit, albedo * weight, out);
+          // Interreflection only where the camera sees the surface
+          // directly: seen in the cornea's mirror it is a few percent of
+          // a few percent.
+          if (primary) interreflection(ray, hit, albedo * weight, *primary, out);
+        }
         return;
       case Surface::iris: {
         const Point3 local = scene_.eyes[hit.eye].eye_from_world() * hit.point;
@@ -209,8 +244,92 @@ class FastIntegrator final : public PathIntegrator {
         return;
       case Surface::cornea_anterior:
       case Surface::cornea_posterior:
-        interface(ray, hit, depth, weight, out, record);
+        interface(ray, hit, depth, weight, out, primary);
         return;
+    }
+  }
+
+  static DiffusePoint diffuse_point(const Ray& ray, const Hit& hit) {
+    DiffusePoint p;
+    p.surface = hit.surface;
+    p.owner = hit.surface == Surface::mesh ? hit.mesh : hit.eye;
+    p.point = hit.point;
+    p.normal = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
+    p.cos_view = std::abs(dot(p.normal, ray.direction.vector()));
+    return p;
+  }
+
+  // The first diffuse point along the transmitted chain of the camera ray
+  // through `image_position` (for the diffuse cache's nodes).
+  DiffusePoint diffuse_point_at(const Pixel& image_position) const {
+    Ray ray{camera_.center(), camera_.back_project(image_position)};
+    double path_mm = 0;
+    for (int depth = 0; depth <= kMaxSpecularDepth; ++depth) {
+      const Hit hit = tracer_.intersect(ray);
+      path_mm += hit.t;
+      switch (hit.surface) {
+        case Surface::skin:
+        case Surface::sclera:
+        case Surface::mesh: {
+          if (!(diffuse_albedo(scene_, hit) > 0)) return {};
+          DiffusePoint p = diffuse_point(ray, hit);
+          p.path_mm = path_mm;
+          return p;
+        }
+        case Surface::cornea_anterior:
+        case Surface::cornea_posterior: {
+          const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+          if (!c.transmitted) return {};
+          ray = {hit.point - c.facing * kRayOffsetMm, *c.transmitted};
+          break;
+        }
+        default:
+          return {};  // the iris has its own cache; the pupil, nothing
+      }
+    }
+    return {};
+  }
+
+  // Irradiance from light that bounced off other diffuse surfaces, at a
+  // diffuse hit the camera sees: from the cache, or gathered here where no
+  // cache node serves the point.
+  void interreflection(const Ray& ray, const Hit& hit, double scaled_albedo, const Primary& primary,
+                       Contribution& out) const {
+    constexpr std::size_t kStackLights = 16;
+    std::array<double, kStackLights> stack{};
+    std::vector<double> heap(lights_.size() > kStackLights ? lights_.size() : 0);
+    double* e = heap.empty() ? stack.data() : heap.data();
+    const DiffusePoint p = diffuse_point(ray, hit);
+    if (!diffuse_->irradiance(primary.image_position, p, e)) {
+      std::fill(e, e + lights_.size(), 0.0);
+      gather_hemisphere(p.point, p.normal, kDiffuseMissRays, kCacheMissStream, primary.path, e);
+    }
+    for (std::size_t k = 0; k < lights_.size(); ++k) out.add(scaled_albedo * kInvPi * e[k], lights_[k]);
+  }
+
+  // Irradiance at `point` (facing `normal`) from diffuse surfaces one
+  // bounce away, per light into `e`: `rays` cosine-distributed
+  // low-discrepancy directions, shifted by random numbers keyed by
+  // (stream, key).
+  void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, std::uint64_t stream,
+                         std::uint64_t key, double* e) const {
+    const double shift_u = uniform01(seed_, stream, 2 * key), shift_v = uniform01(seed_, stream, 2 * key + 1);
+    gather_hemisphere(point, normal, rays, shift_u, shift_v, e);
+  }
+  void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, double shift_u, double shift_v,
+                         double* e) const {
+    Vector3 a = std::abs(normal.x) < 0.9 ? cross(normal, Vector3{1, 0, 0}) : cross(normal, Vector3{0, 1, 0});
+    a = a * (1.0 / a.norm());
+    const Vector3 b = cross(normal, a);
+    const Point3 origin = point + normal * kRayOffsetMm;
+    for (int i = 0; i < rays; ++i) {
+      const auto [u, v] = subpixel_offset_r2(i, shift_u, shift_v);
+      const double s = std::sqrt(u), phi = 2 * std::numbers::pi * v;
+      const auto dir = UnitVector3::try_normalize(normal * std::sqrt(std::max(0.0, 1 - u)) +
+                                                  a * (s * std::cos(phi)) + b * (s * std::sin(phi)));
+      if (!dir) continue;
+      // Cosine-distributed directions: E = pi * mean radiance.
+      gather({origin, *dir}, 0, std::numbers::pi / rays, e);
     }
   }
 
@@ -274,31 +393,19 @@ class FastIntegrator final : public PathIntegrator {
     // the rim interpolate between iris values.
     const double r_max = 0.98 * m.iris_radius_mm;
     const UnitVector3 n = eye.world_from_eye().rotation() * UnitVector3::unit_z();
-    Vector3 a = std::abs(n.x()) < 0.9 ? cross(n.vector(), Vector3{1, 0, 0}) : cross(n.vector(), Vector3{0, 1, 0});
-    a = a * (1.0 / a.norm());
-    const Vector3 b = cross(n.vector(), a);
     tbb::parallel_for(0, cache.side * cache.side, [&](int node) {
       double x = -cache.half_mm + cache.step_mm * (node % cache.side);
       double y = -cache.half_mm + cache.step_mm * (node / cache.side);
       const double r = std::hypot(x, y);
       if (r > r_max) x *= r_max / r, y *= r_max / r;
-      const Point3 origin = eye.world_from_eye() * Point3{x, y, z} + n.vector() * kRayOffsetMm;
-      double* e = &cache.irradiance[static_cast<std::size_t>(node) * cache.lights];
-      for (int i = 0; i < kIndirectRays; ++i) {
-        const auto [u, v] = subpixel_offset_r2(i, 0.5, 0.5);
-        const double s = std::sqrt(u), phi = 2 * std::numbers::pi * v;
-        const auto dir = UnitVector3::try_normalize(n.vector() * std::sqrt(std::max(0.0, 1 - u)) +
-                                                    a * (s * std::cos(phi)) + b * (s * std::sin(phi)));
-        if (!dir) continue;
-        // Cosine-distributed directions: E = pi * mean radiance.
-        gather({origin, *dir}, 0, std::numbers::pi / kIndirectRays, eye_index, e);
-      }
+      gather_hemisphere(eye.world_from_eye() * Point3{x, y, z}, n.vector(), kIndirectRays, 0.5, 0.5,
+                        &cache.irradiance[static_cast<std::size_t>(node) * cache.lights]);
     });
   }
 
   // Radiance arriving along a ray leaving the iris, after one more
   // diffuse reflection, times `weight`, per light into `e`.
-  void gather(const Ray& ray, int depth, double weight, int eye_index, double* e) const {
+  void gather(const Ray& ray, int depth, double weight, double* e) const {
     const Hit hit = tracer_.intersect(ray);
     const auto add = [&](std::size_t k, double radiance) { e[k] += radiance; };
     switch (hit.surface) {
@@ -320,10 +427,10 @@ class FastIntegrator final : public PathIntegrator {
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const double w_t = weight * (1 - c.reflectance) * c.eta * c.eta, w_r = weight * c.reflectance;
         if (c.transmitted && w_t > kMinBranchWeight * weight) {
-          gather({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w_t, eye_index, e);
+          gather({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w_t, e);
         }
         if (c.reflected && w_r > kMinBranchWeight * weight) {
-          gather({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_r, eye_index, e);
+          gather({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_r, e);
         }
         return;
       }
@@ -335,13 +442,13 @@ class FastIntegrator final : public PathIntegrator {
   // Fresnel reflection and refraction at a corneal surface, both traced.
   // Radiance crossing from index n2 into n1 scales by (n1 / n2)^2.
   void interface(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
-                 PrimaryRecord* record) const {
+                 const Primary* primary) const {
     if (depth >= kMaxSpecularDepth) return;
     const InterfaceCrossing c = cross_interface(scene_, ray, hit);
     if (c.transmitted) {
       const double w = weight * (1.0 - c.reflectance) * c.eta * c.eta;
       if (w > kMinBranchWeight * 1e-3) {
-        trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w, out, record);
+        trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w, out, primary);
       }
     }
     const double w_reflected = weight * c.reflectance;
@@ -356,6 +463,8 @@ class FastIntegrator final : public PathIntegrator {
   std::vector<Light> lights_;
   std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
   std::vector<IrisIndirect> iris_indirect_ = std::vector<IrisIndirect>(scene_.eyes.size());  // [eye]
+  std::uint64_t seed_ = 0;
+  std::unique_ptr<DiffuseCache> diffuse_;
 };
 
 
@@ -477,9 +586,10 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
           for (int s = 0; s < spp; ++s) {
             // A per-pixel random shift decorrelates pixels.
             const auto [ou, ov] = subpixel_offset_r2(s, shift_u, shift_v);
-            const UnitVector3 dir = camera.back_project({x - 0.5 + ou, y - 0.5 + ov});
+            const Pixel image_position{x - 0.5 + ou, y - 0.5 + ov};
             PrimaryRecord record;
-            integrator->sample({center, dir}, pixel * spp + s, sum, record);
+            integrator->sample({center, camera.back_project(image_position)}, image_position, pixel * spp + s,
+                               sum, record);
             const int c = static_cast<int>(record.pixel_class);
             if (counts[c]++ == 0) first_of_class[c] = record;
             cornea_hits += record.through_cornea ? 1 : 0;

@@ -85,6 +85,7 @@ struct RenderRequest {
   std::string camera;  // empty: every camera
   std::string mode = "fast";
   int samples = purkinje::renderer::RenderOptions{}.samples_per_pixel;
+  int edge_samples = purkinje::renderer::RenderOptions{}.edge_samples_per_pixel;
   std::int64_t photons = purkinje::renderer::RenderOptions{}.reference_photons_per_light;
   std::uint64_t seed = 0;
   bool no_noise = false;
@@ -124,6 +125,7 @@ int run_render(const RenderRequest& request) {
   options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
   options.reference_photons_per_light = request.photons;
   options.samples_per_pixel = request.samples;
+  options.edge_samples_per_pixel = request.edge_samples;
   options.seed = request.seed;
   options.noise = !request.no_noise;
   options.per_light_glint_masks = request.glint_masks;
@@ -233,8 +235,13 @@ int run(int argc, char** argv) {
                      "use --samples 256 or more)")
       ->check(CLI::IsMember({"fast", "reference"}))
       ->capture_default_str();
-  render->add_option("--samples", render_request.samples, "Camera rays per pixel")
+  render->add_option("--samples", render_request.samples, "Camera rays per pixel (one: through its centre)")
       ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
+  render->add_option("--edge-samples", render_request.edge_samples,
+                     "Camera rays per pixel on outlines, texture and shadow edges\n"
+                     "(adaptive sampling; 0 or at most --samples: off)")
+      ->check(CLI::Range(0, 1 << 20))
       ->capture_default_str();
   render->add_option("--photons", render_request.photons,
                      "Reference mode: photons per light and eye for the light through the cornea")

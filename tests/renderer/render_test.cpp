@@ -564,10 +564,73 @@ TEST(RenderGlints, PerLightMasksAddUpToTheGlintMask) {
   EXPECT_GT(largest, 0.5);  // some pixel is mostly glint
 }
 
+// Adaptive sampling: one ray through each pixel's centre, then 16 where
+// the first pass finds outlines, texture or shadow edges. Against 16 rays
+// in every pixel (the same rays where both trace 16) it must leave no
+// undersampled pixel behind: a missed outline pixel would differ by tens
+// of percent of the mean. Measured: RMSE 0.1% of the mean, worst pixel
+// 5.6% (sub-pixel iris texture), 41% of this eye region refined.
+TEST(RenderAdaptive, MatchesSixteenRaysEverywhereAtAFractionOfTheRays) {
+  const Scene scene = bundled("headset");
+  RenderOptions options;
+  options.noise = false;
+  options.region = PixelRegion{100, 120, 300, 300};
+  options.samples_per_pixel = 1;
+  options.edge_samples_per_pixel = 16;
+  const RenderResult adaptive = render(scene, 0, options);
+  options.samples_per_pixel = 16;
+  const RenderResult uniform = render(scene, 0, options);
+  double sum_sq = 0, sum = 0, worst = 0;
+  int pixels = 0, edges = 0;
+  for (int y = 120; y < 300; ++y) {
+    for (int x = 100; x < 300; ++x) {
+      const double a = adaptive.radiance.at(x, y), u = uniform.radiance.at(x, y);
+      sum_sq += (a - u) * (a - u);
+      sum += u;
+      worst = std::max(worst, std::abs(a - u));
+      edges += a == u ? 1 : 0;  // traced with the same 16 rays
+      ++pixels;
+    }
+  }
+  const double mean = sum / pixels;
+  RecordProperty("relative_rmse", std::to_string(std::sqrt(sum_sq / pixels) / mean));
+  RecordProperty("worst_over_mean", std::to_string(worst / mean));
+  RecordProperty("edge_fraction", std::to_string(double(edges) / pixels));
+  EXPECT_LT(std::sqrt(sum_sq / pixels) / mean, 0.002);
+  EXPECT_LT(worst / mean, 0.1);
+  // The eye, its lids and their shadows are the edges; most of the skin is not.
+  EXPECT_GT(edges, pixels / 20);
+  EXPECT_LT(edges, pixels / 2);
+}
+
+// Edge detection looks one pixel beyond a region and the caches' lattices
+// are anchored at pixel (0, 0): a region renders exactly as the same part
+// of the whole image.
+TEST(RenderAdaptive, ARegionIsExactlyThatPartOfTheWholeImage) {
+  const Scene scene = bundled("headset");
+  RenderOptions options;
+  options.noise = false;
+  const RenderResult whole = render(scene, 0, options);
+  const PixelRegion region{171, 143, 229, 236};
+  options.region = region;
+  const RenderResult part = render(scene, 0, options);
+  for (int y = 0; y < 400; ++y) {
+    for (int x = 0; x < 400; ++x) {
+      const bool inside = x >= region.x0 && x < region.x1 && y >= region.y0 && y < region.y1;
+      ASSERT_EQ(part.radiance.at(x, y), inside ? whole.radiance.at(x, y) : 0.0f) << x << ", " << y;
+      ASSERT_EQ(aov(part, "id").at(x, y), inside ? aov(whole, "id").at(x, y) : 0.0f) << x << ", " << y;
+      ASSERT_EQ(aov(part, "iris").at(x, y), inside ? aov(whole, "iris").at(x, y) : 0.0f) << x << ", " << y;
+    }
+  }
+}
+
 TEST(RenderOptionsCheck, BadOptionsThrowNamingTheValue) {
   const Scene scene = bundled("headset");
   RenderOptions options;
   options.samples_per_pixel = 0;
+  EXPECT_THROW(render(scene, 0, options), std::invalid_argument);
+  options = {};
+  options.edge_samples_per_pixel = -1;
   EXPECT_THROW(render(scene, 0, options), std::invalid_argument);
   options = {};
   EXPECT_THROW(render(scene, 3, options), std::invalid_argument);

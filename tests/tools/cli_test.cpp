@@ -198,6 +198,7 @@ TEST_F(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --samples 0"), 2);
   EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --mode magic"), 2);
   EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --mode reference --photons 0"), 2);
+  EXPECT_EQ(run("render " + scene + " -o " + quoted(output_dir_.string()) + " --edge-samples -1"), 2);
   EXPECT_EQ(run("truth " + scene + " --format xml"), 2);
   EXPECT_EQ(run("truth " + scene + " --pupil-points -3"), 2);
   EXPECT_EQ(run("truth " + scene + " --no-such-option"), 2);
@@ -253,6 +254,7 @@ TEST_F(Cli, RenderWritesTheImageItsAovsAndLabels) {
   EXPECT_EQ(labels["render"]["files"]["image"], "headset_eye_cam.png");
   EXPECT_EQ(labels["render"]["seed"], 3);
   EXPECT_EQ(labels["render"]["samples_per_pixel"], 1);
+  EXPECT_EQ(labels["render"]["edge_samples_per_pixel"], 16);
   EXPECT_EQ(labels["render"]["glints"].size(), 8u);
 }
 

@@ -40,7 +40,13 @@ struct PixelRegion {
 
 struct RenderOptions {
   RenderMode mode = RenderMode::fast;
-  int samples_per_pixel = 4;      // camera rays per pixel, low-discrepancy with a seeded shift
+  // Camera rays per pixel, low-discrepancy with a seeded shift; a single
+  // ray goes through the pixel's centre.
+  int samples_per_pixel = 1;
+  // Adaptive sampling: when larger than samples_per_pixel, the pixels that
+  // the first pass finds on outlines, textures or shadow edges are
+  // rendered again with this many rays. 0: off.
+  int edge_samples_per_pixel = 16;
   std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
   bool noise = true;              // false: no shot or read noise whatever the sensor says
   int iris_cache_resolution = 33; // nodes per side of each iris irradiance cache (fast mode)

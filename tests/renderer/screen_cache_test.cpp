@@ -1,0 +1,159 @@
+// The fast mode's screen-space caches (renderer/src/screen_cache.h) on a
+// synthetic scene: a camera looking straight at the plane z = 100 mm, so
+// that every pixel's diffuse point is known in closed form.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "../../renderer/src/screen_cache.h"
+
+namespace purkinje::renderer {
+namespace {
+
+constexpr int kSize = 64;
+constexpr double kPlaneZ = 100;
+
+Camera test_camera() {
+  Intrinsics k;
+  k.fx = k.fy = 100;
+  k.cx = k.cy = (kSize - 1) / 2.0;
+  k.width = k.height = kSize;
+  return Camera("cam", k, Distortion{}, Pose{}, Sensor{});
+}
+
+// The plane's point seen at an image position; x >= `split_x_mm` belongs to
+// another owner (a second surface).
+DiffusePoint plane_point(const Camera& camera, const Pixel& p, double split_x_mm = 1e9) {
+  const UnitVector3 d = camera.back_project(p);
+  const double t = kPlaneZ / d.z();
+  DiffusePoint q;
+  q.surface = Surface::skin;
+  q.point = camera.center() + d * t;
+  q.owner = q.point.x >= split_x_mm ? 1 : 0;
+  q.normal = {0, 0, -1};
+  q.path_mm = t;
+  q.cos_view = d.z();
+  return q;
+}
+
+const PixelRegion kWhole{0, 0, kSize, kSize};
+
+TEST(VisibilityCache, AgreesWhereAllFourNodesAgreeAndKnowsNothingAtAShadowEdge) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  // Light 0 is blocked where x > 0 (the right half of the image); light 1
+  // lights everything.
+  const auto lit = [](const DiffusePoint& p, std::size_t light) { return light == 1 || p.point.x <= 0; };
+  const VisibilityCache cache(camera, kWhole, 2, 2, find, lit);
+
+  const Pixel left{10.3, 20.6}, right{50.2, 33.9}, at_edge{31.9, 40.0};
+  const auto left_agreed = cache.at(left, find(left));
+  EXPECT_EQ(left_agreed.known, 0b11u);
+  EXPECT_EQ(left_agreed.lit, 0b11u);
+  const auto right_agreed = cache.at(right, find(right));
+  EXPECT_EQ(right_agreed.known, 0b11u);
+  EXPECT_EQ(right_agreed.lit, 0b10u);
+  // The shadow edge (x = 0 at u = 31.5) runs between the nodes at u = 30
+  // and u = 32: light 0 must be traced there, light 1 need not be.
+  const auto edge_agreed = cache.at(at_edge, find(at_edge));
+  EXPECT_EQ(edge_agreed.known, 0b10u);
+  EXPECT_EQ(edge_agreed.lit, 0b10u);
+}
+
+TEST(VisibilityCache, KnowsNothingWhereTheNodesSeeAnotherSurface) {
+  const Camera camera = test_camera();
+  // The plane's right part (x >= 0.5 mm, from u = 32) is another surface.
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p, 0.5); };
+  const auto lit = [](const DiffusePoint&, std::size_t) { return true; };
+  const VisibilityCache cache(camera, kWhole, 2, 1, find, lit);
+  const Pixel near_seam{31.0, 10.0}, far_from_seam{20.0, 10.0};
+  EXPECT_EQ(cache.at(near_seam, find(near_seam)).known, 0u);
+  EXPECT_EQ(cache.at(far_from_seam, find(far_from_seam)).known, 1u);
+}
+
+// The known limit (docs/rendering.md): a shadow narrower than the node
+// spacing that falls between the nodes is not seen. The renderer's
+// spacing is 2 px.
+TEST(VisibilityCache, AShadowBetweenNodesNarrowerThanTheSpacingIsMissed) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  // A stripe of shadow 1 px wide centred on u = 41, between the nodes at
+  // u = 40 and u = 42.
+  const auto x_at = [&](double u) { return (u - camera.intrinsics().cx) / camera.intrinsics().fx * kPlaneZ; };
+  const double x0 = x_at(40.5), x1 = x_at(41.5);
+  const auto lit = [&](const DiffusePoint& p, std::size_t) { return p.point.x < x0 || p.point.x > x1; };
+  const VisibilityCache cache(camera, kWhole, 2, 1, find, lit);
+  const Pixel in_stripe{41.0, 12.0};
+  const auto agreed = cache.at(in_stripe, find(in_stripe));
+  EXPECT_EQ(agreed.known, 1u);
+  EXPECT_EQ(agreed.lit, 1u);  // wrong, as documented
+}
+
+TEST(VisibilityCache, MoreLightsThanItHoldsLeavesEverythingToTheTracer) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  int calls = 0;
+  const auto lit = [&](const DiffusePoint&, std::size_t) { return ++calls, true; };
+  const VisibilityCache cache(camera, kWhole, 2, VisibilityCache::kMaxLights + 1, find, lit);
+  EXPECT_EQ(calls, 0);
+  const Pixel p{20, 20};
+  EXPECT_EQ(cache.at(p, find(p)).known, 0u);
+}
+
+TEST(DiffuseCache, InterpolatesAConstantExactlyAndRefusesAnotherSurface) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p, 0.5); };
+  // 2 W/m^2 from light 0 and 3 from light 1 on owner 0; owner 1 gets 7 and 9.
+  const auto gather = [](const DiffusePoint& p, std::uint64_t, double* e) {
+    e[0] += p.owner == 0 ? 2 : 7;
+    e[1] += p.owner == 0 ? 3 : 9;
+  };
+  const DiffuseCache cache(camera, kWhole, 8, 2, find, gather);
+  double e[2];
+  const Pixel left{13.7, 21.2};
+  ASSERT_TRUE(cache.irradiance(left, find(left), e));
+  EXPECT_DOUBLE_EQ(e[0], 2);
+  EXPECT_DOUBLE_EQ(e[1], 3);
+  // Just right of the seam (u = 32): the nodes at u = 32 and 40 see owner 1.
+  const Pixel right{32.2, 21.2};
+  ASSERT_TRUE(cache.irradiance(right, find(right), e));
+  EXPECT_DOUBLE_EQ(e[0], 7);
+  EXPECT_DOUBLE_EQ(e[1], 9);
+  // Owner 1 seen where every node around sees owner 0 (as a thin sliver
+  // would be): no node serves it, the caller must gather.
+  DiffusePoint sliver = find(left);
+  sliver.owner = 1;
+  EXPECT_FALSE(cache.irradiance(left, sliver, e));
+}
+
+// The lattice is anchored at pixel (0, 0) and covers every sample of the
+// region's pixels, so a region's lookups are the whole image's.
+TEST(DiffuseCache, ARegionLooksUpExactlyWhatTheWholeImageDoes) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  // Irradiance that differs from node to node, keyed by the node's place.
+  const auto gather = [&](const DiffusePoint&, std::uint64_t key, double* e) {
+    e[0] += static_cast<double>((key * 2654435761u) % 1000);
+  };
+  const PixelRegion region{17, 9, 30, 25};
+  const DiffuseCache whole(camera, kWhole, 8, 1, find, gather);
+  const DiffuseCache part(camera, region, 8, 1, find, gather);
+  int checked = 0;
+  for (double v = region.y0 - 0.5; v <= region.y1 - 0.5; v += 0.25) {
+    for (double u = region.x0 - 0.5; u <= region.x1 - 0.5; u += 0.25) {
+      double a = -1, b = -2;
+      const Pixel p{u, v};
+      ASSERT_TRUE(whole.irradiance(p, find(p), &a));
+      ASSERT_TRUE(part.irradiance(p, find(p), &b));
+      ASSERT_EQ(a, b) << "at (" << u << ", " << v << ")";
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 3000);
+}
+
+}  // namespace
+}  // namespace purkinje::renderer

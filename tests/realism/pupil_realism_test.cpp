@@ -7,17 +7,16 @@
 // centre of rotation so that the gaze (visual axis) moves by a direction
 // drawn uniformly over the spherical cap within 30 deg of the scene's own
 // gaze, and a pupil radius drawn uniformly from [1, 4] mm; everything else
-// (lids, albedos, iris texture, lights, sensor with its noise, 4 samples
-// per pixel) is as the scene and the renderer's defaults say. The detector
-// sees only the 8-bit sensor image; the label is the refracted pupil
-// ellipse's centre of the camera's view.
+// (lids, whose margins follow the turned eye's elevation, albedos, iris
+// texture, lights, sensor with its noise, 4 samples per pixel) is as the
+// scene and the renderer's defaults say. The detector sees only the 8-bit
+// sensor image; the label is the refracted pupil ellipse's centre of the
+// camera's view.
 //
-// What the bar measures, and what it found: see docs/rendering.md, "Realism".
-// The bar as written is NOT met: with the lids fixed to the head (real lids
-// follow the gaze), a quarter of the remote scene's renders have the
-// pupil's centre hidden under a lid, and one in ten of the headset's. It is
-// met on the renders whose pupil no lid covers. The assertions below hold
-// what is true and say where the gap is.
+// What the bar measures, and what it found: see docs/rendering.md,
+// "Realism". With the lids following vertical gaze (Eyelids in
+// appearance.h) the bar is met on both scenes; the assertions below hold
+// it on the full 200 renders.
 
 #include <gtest/gtest.h>
 
@@ -276,6 +275,10 @@ SceneFigures run_scene(const std::string& name, std::uint64_t variant_seed) {
   row("all (the bar)", "all", f.all);
   row("pupil wholly visible", "whole", f.whole);
   row("pupil centre visible", "centre_visible", f.centre_visible_or_whole);
+  const int centre_hidden = f.all.renders - f.centre_visible_or_whole.renders;
+  std::cout << "  pupil centre hidden by a lid: " << centre_hidden << " renders; part of the border hidden: "
+            << f.centre_visible_or_whole.renders - f.whole.renders << "\n";
+  ::testing::Test::RecordProperty(name + "_centre_hidden", centre_hidden);
   // The misses the lids do not explain away, for the closing note.
   for (const Outcome& o : outcomes) {
     if (o.error_px <= 2.0 || o.visibility == Visibility::centre_hidden) continue;
@@ -287,29 +290,26 @@ SceneFigures run_scene(const std::string& name, std::uint64_t variant_seed) {
   return f;
 }
 
-// What holds, scene by scene. The bar (0.99 of all renders within 2 px) is
-// asserted where it is met, on renders whose pupil the lids leave whole. The
-// figures over all renders, below the bar because of lid occlusion, are held
-// at what was measured (docs/rendering.md), so that a change that makes the
-// images less realistic still fails; they apply only to the full 200.
-void expect_realism(const SceneFigures& f, double all_at_least, double centre_visible_at_least) {
-  EXPECT_GE(f.whole.fraction_within_2px(), 0.99);
+// The bar: at least 0.99 of the 200 renders within 2 px, and of the
+// subsets the lids leave whole or with the centre visible. It is asserted
+// on the full 200 only (PURKINJE_REALISM_RENDERS lowers the count to check
+// the code, not the bar); the wholly visible pupils are held to it always.
+void expect_realism(const SceneFigures& f) {
   EXPECT_GT(f.whole.renders, 0);
+  EXPECT_GE(f.whole.fraction_within_2px(), 0.99);
   if (f.all.renders == kBarRenders) {
-    EXPECT_GE(f.all.fraction_within_2px(), all_at_least) << "the bar itself is 0.99";
-    EXPECT_GE(f.centre_visible_or_whole.fraction_within_2px(), centre_visible_at_least);
+    EXPECT_GE(f.all.fraction_within_2px(), 0.99) << "the bar";
+    EXPECT_GE(f.centre_visible_or_whole.fraction_within_2px(), 0.99);
+    // The lids still take part: some pupils are partly covered (7 remote,
+    // 36 headset when measured), so the bar is not met by lids that moved
+    // out of the way.
+    EXPECT_LT(f.whole.renders, f.all.renders) << "no lid covers any pupil";
   }
 }
 
-TEST(PupilRealism, RemoteScene) {
-  const SceneFigures f = run_scene("remote", 1);
-  expect_realism(f, 0.68, 0.92);
-}
+TEST(PupilRealism, RemoteScene) { expect_realism(run_scene("remote", 1)); }
 
-TEST(PupilRealism, HeadsetScene) {
-  const SceneFigures f = run_scene("headset", 2);
-  expect_realism(f, 0.92, 0.97);
-}
+TEST(PupilRealism, HeadsetScene) { expect_realism(run_scene("headset", 2)); }
 
 // The test renders only the eye region: pixels outside it stay black and
 // the point-spread function blurs that black into the region's rim. The

@@ -783,6 +783,12 @@ EyeAppearance read_appearance(Object& e) {
     lids.lower_margin_mm = o.get_or<double>("lower_margin_mm", lids.lower_margin_mm);
     lids.closing_line_mm = o.get_or<double>("closing_line_mm", lids.closing_line_mm);
     lids.half_width_mm = o.positive_or("half_width_mm", lids.half_width_mm);
+    // Lid-gaze coupling: 0 holds a margin to the head, 1 turns it with the
+    // eye; 2 is beyond any lid and bounds typing slips (20 for 0.2).
+    lids.upper_gain_upgaze = o.within_or("upper_gain_upgaze", 0, 2, lids.upper_gain_upgaze);
+    lids.upper_gain_downgaze = o.within_or("upper_gain_downgaze", 0, 2, lids.upper_gain_downgaze);
+    lids.lower_gain_upgaze = o.within_or("lower_gain_upgaze", 0, 2, lids.lower_gain_upgaze);
+    lids.lower_gain_downgaze = o.within_or("lower_gain_downgaze", 0, 2, lids.lower_gain_downgaze);
     check_lid_heights(o, lids);
     o.finish();
     a.eyelids = lids;

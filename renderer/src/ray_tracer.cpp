@@ -31,7 +31,9 @@
 // at most rotation-centre-depth from the origin, clears it in every gaze),
 // z_f = 0.45 R_l.
 //   skin (lids)       the sphere |p| = R_l where z >= z_f, minus the
-//                     palpebral opening (surfaces.h), both sides.
+//                     palpebral opening (surfaces.h), both sides; the
+//                     opening's margins turned about x as the lids follow
+//                     the eye's elevation (Eyelids in appearance.h).
 //   skin (face)       the plane z = z_f from the lid sphere's rim out to
 //                     150 mm; with several eyes, each eye's face stops
 //                     half way to the other eyes' centres of rotation, so a
@@ -581,8 +583,25 @@ void add_lids(SurfaceList& list, int index, const Scene& scene) {
   lid.radius_mm = R_l;
   lid.min_z_mm = z_f;
   lid.max_z_mm = R_l;
-  lid.opening = {lids.opening, lids.upper_margin_mm, lids.lower_margin_mm, lids.closing_line_mm,
-                 lids.half_width_mm};
+  lid.opening.opening = lids.opening;
+  lid.opening.upper_margin_mm = lids.upper_margin_mm;
+  lid.opening.lower_margin_mm = lids.lower_margin_mm;
+  lid.opening.closing_line_mm = lids.closing_line_mm;
+  lid.opening.half_width_mm = lids.half_width_mm;
+  // The margins follow the eye's vertical rotation (Eyelids in appearance.h).
+  for (const auto& [key, gain] : {std::pair{"upper_gain_upgaze", lids.upper_gain_upgaze},
+                                  std::pair{"upper_gain_downgaze", lids.upper_gain_downgaze},
+                                  std::pair{"lower_gain_upgaze", lids.lower_gain_upgaze},
+                                  std::pair{"lower_gain_downgaze", lids.lower_gain_downgaze}}) {
+    if (!(gain >= 0 && gain <= 2)) {
+      fail_eye(index, eye.model(), std::string("eyelids ") + key + " = " + number(gain) + ": must be in [0, 2]");
+    }
+  }
+  const double elevation = surfaces::eye_elevation_rad(head_from_world * eye.optical_axis().vector());
+  const surfaces::MarginTurns turns = surfaces::margin_turns(
+      lids.upper_gain_upgaze, lids.upper_gain_downgaze, lids.lower_gain_upgaze, lids.lower_gain_downgaze, elevation);
+  lid.opening.upper_turn = surfaces::MarginTurn::by(turns.upper_rad);
+  lid.opening.lower_turn = surfaces::MarginTurn::by(turns.lower_rad);
   add(list, Surface::skin, index, world_from_head, lid);
   // The socket: the rest of the sphere, behind the face, without an
   // opening. Near the canthi the opening reaches past the eyeball's

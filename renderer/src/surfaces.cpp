@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace purkinje::renderer::surfaces {
 
@@ -141,13 +142,44 @@ Box PlaneRegion::bounds() const {
   return {{outer_x_mm - r, outer_y_mm - r, z_mm}, {outer_x_mm + r, outer_y_mm + r, z_mm}};
 }
 
+MarginTurn MarginTurn::by(double radians) { return {std::cos(radians), std::sin(radians)}; }
+
+namespace {
+
+// Whether p, turned back by `turn` (its elevation lowered by the margin's
+// turn), lies below (sign +1) or above (sign -1) the head-fixed margin
+// height m. While the turned point is in front (z > 0) its elevation and
+// the margin's both lie in (-90, 90) deg, where comparing sines (y against
+// m, at the same distance from the x axis) compares angles; behind, its
+// elevation lies beyond +-90 deg (the turn is at most 90 deg, so it stays
+// within +-180 deg), below every margin when y < 0, above when y > 0.
+bool beyond_margin(const Point3& p, const MarginTurn& turn, double m, double sign) {
+  const double y = p.y * turn.cos - p.z * turn.sin;
+  const double z = p.y * turn.sin + p.z * turn.cos;
+  return z > 0.0 ? sign * y < sign * m : sign * y < 0.0;
+}
+
+}  // namespace
+
 bool PalpebralOpening::contains(const Point3& p) const {
   if (!(p.z > 0.0) || !(std::abs(p.x) < half_width_mm)) return false;
   const double u = p.x / half_width_mm;
   const double f = opening * (1.0 - u * u);
   const double upper = closing_line_mm + (upper_margin_mm - closing_line_mm) * f;
   const double lower = closing_line_mm + (lower_margin_mm - closing_line_mm) * f;
-  return p.y > lower && p.y < upper;
+  return beyond_margin(p, upper_turn, upper, 1.0) && beyond_margin(p, lower_turn, lower, -1.0);
+}
+
+double eye_elevation_rad(const Vector3& optical_axis_head) {
+  return std::atan2(optical_axis_head.y, optical_axis_head.z);
+}
+
+MarginTurns margin_turns(double upper_gain_upgaze, double upper_gain_downgaze, double lower_gain_upgaze,
+                         double lower_gain_downgaze, double eye_elevation_rad) {
+  const double e = eye_elevation_rad;
+  const double limit = std::numbers::pi / 2;
+  const auto turn = [&](double up, double down) { return std::clamp((e >= 0 ? up : down) * e, -limit, limit); };
+  return {turn(upper_gain_upgaze, upper_gain_downgaze), turn(lower_gain_upgaze, lower_gain_downgaze)};
 }
 
 bool EyelidSphere::first_hit(const Segment& s, double& t) const {

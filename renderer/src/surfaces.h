@@ -97,20 +97,49 @@ struct PlaneRegion {
   bool contains(double x, double y) const;  // the point (x, y, z_mm)
 };
 
+// A turn about the head frame's x axis, positive carrying +z toward +y
+// (up): cosine and sine, computed once.
+struct MarginTurn {
+  double cos = 1.0;
+  double sin = 0.0;
+  static MarginTurn by(double radians);
+};
+
 // Margins of the palpebral opening, heights along the head frame's y axis
 // (see Eyelids in appearance.h): with f = opening (1 - (x / half_width)^2),
 // upper(x) = closing + (upper - closing) f, lower(x) = closing + (lower - closing) f.
+// Each margin is then turned about the x axis with the lid sphere it lies
+// on (upper_turn, lower_turn: the lids following the gaze). Where the
+// turned margins cross, no point is below the one and above the other:
+// the lids meet and the opening is closed there.
 struct PalpebralOpening {
   double opening = 1.0;
   double upper_margin_mm = 4.5;
   double lower_margin_mm = -5.5;
   double closing_line_mm = -1.0;
   double half_width_mm = 15.0;
+  MarginTurn upper_turn;
+  MarginTurn lower_turn;
 
   // Whether the head-frame point lies in the opening (z > 0, |x| < half
-  // width, strictly between the margins).
+  // width, strictly between the margins). A point is below a margin turned
+  // by a when its elevation in its plane x = const, atan2(y, z), is less
+  // than the margin's elevation at the point's distance from the x axis,
+  // plus a; with no turn this is y < margin height.
   bool contains(const Point3& p) const;
 };
+
+// How far each margin turns (radians, positive up) when the eye's optical
+// axis points along `optical_axis_head` (head frame: x left-right, y up,
+// z forward): gain times the eye's elevation atan2(y, z), the gain chosen
+// by the elevation's sign; each turn limited to +-90 deg.
+struct MarginTurns {
+  double upper_rad = 0.0;
+  double lower_rad = 0.0;
+};
+double eye_elevation_rad(const Vector3& optical_axis_head);
+MarginTurns margin_turns(double upper_gain_upgaze, double upper_gain_downgaze, double lower_gain_upgaze,
+                         double lower_gain_downgaze, double eye_elevation_rad);
 
 // The lids: the sphere |p| = radius about the head frame's origin (the
 // eye's centre of rotation), only where min_z_mm <= z <= max_z_mm, minus

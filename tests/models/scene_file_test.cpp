@@ -425,13 +425,18 @@ TEST(SceneFile, EmptyEyelidsObjectTurnsOnLidsWithTheDocumentedDefaults) {
   EXPECT_EQ(a.eyelids->lower_margin_mm, -5.5);
   EXPECT_EQ(a.eyelids->closing_line_mm, -1.0);
   EXPECT_EQ(a.eyelids->half_width_mm, 15.0);
+  EXPECT_EQ(a.eyelids->upper_gain_upgaze, 1.0);
+  EXPECT_EQ(a.eyelids->upper_gain_downgaze, 1.0);
+  EXPECT_EQ(a.eyelids->lower_gain_upgaze, 0.0);
+  EXPECT_EQ(a.eyelids->lower_gain_downgaze, 0.6);
   // The other appearance keys keep their defaults.
   EXPECT_EQ(a.skin_albedo, 0.45);
 }
 
 TEST(SceneFile, ReadsEveryEyelidKey) {
   const Scene scene = parse_scene(eye_with(R"("eyelids": { "opening": 0.25, "upper_margin_mm": 6,
-      "lower_margin_mm": -4, "closing_line_mm": 0.5, "half_width_mm": 12.5 })"),
+      "lower_margin_mm": -4, "closing_line_mm": 0.5, "half_width_mm": 12.5, "upper_gain_upgaze": 0.9,
+      "upper_gain_downgaze": 1.1, "lower_gain_upgaze": 0.2, "lower_gain_downgaze": 0 })"),
                                   "s.json");
   const Eyelids& lids = *scene.eyes[0].appearance().eyelids;
   EXPECT_DOUBLE_EQ(lids.opening, 0.25);
@@ -439,6 +444,10 @@ TEST(SceneFile, ReadsEveryEyelidKey) {
   EXPECT_DOUBLE_EQ(lids.lower_margin_mm, -4);
   EXPECT_DOUBLE_EQ(lids.closing_line_mm, 0.5);
   EXPECT_DOUBLE_EQ(lids.half_width_mm, 12.5);
+  EXPECT_DOUBLE_EQ(lids.upper_gain_upgaze, 0.9);
+  EXPECT_DOUBLE_EQ(lids.upper_gain_downgaze, 1.1);
+  EXPECT_DOUBLE_EQ(lids.lower_gain_upgaze, 0.2);
+  EXPECT_DOUBLE_EQ(lids.lower_gain_downgaze, 0.0);
 }
 
 TEST(SceneFile, EyelidHeightsMustCloseBetweenTheMargins) {
@@ -455,6 +464,10 @@ TEST(SceneFile, EyelidHeightsMustCloseBetweenTheMargins) {
       {R"({ "half_width_mm": -3 })", "eyes[0].eyelids.half_width_mm = -3: must be > 0"},
       {R"({ "upper_margin_mm": "4.5" })", "eyes[0].eyelids.upper_margin_mm = \"4.5\": must be a number"},
       {R"({ "open": 1 })", "eyes[0].eyelids.open = 1: unknown key"},
+      {R"({ "upper_gain_upgaze": -0.1 })", "eyes[0].eyelids.upper_gain_upgaze = -0.1: must be between 0 and 2"},
+      {R"({ "upper_gain_downgaze": 2.5 })", "eyes[0].eyelids.upper_gain_downgaze = 2.5: must be between 0 and 2"},
+      {R"({ "lower_gain_upgaze": null })", "eyes[0].eyelids.lower_gain_upgaze = null: must be a number"},
+      {R"({ "lower_gain_downgaze": "0.6" })", "eyes[0].eyelids.lower_gain_downgaze = \"0.6\": must be a number"},
   };
   for (const auto& [lids, expected] : bad) {
     EXPECT_EQ(parse_error(eye_with(R"("eyelids": )" + lids)).find("scene.json: " + expected), 0u)
@@ -764,6 +777,7 @@ const std::map<std::string, std::string> kMalformed = {
     {"empty_cameras", "cameras = []: must list at least one entry"},
     {"empty_eyes", "eyes = []: must list at least one entry"},
     {"empty_file", "invalid JSON (byte"},
+    {"eyelids_gain_out_of_range", "eyes[0].eyelids.lower_gain_downgaze = 6: must be between 0 and 2"},
     {"eyelids_margins_crossed", "eyes[0].eyelids.lower_margin_mm = 0: must be < closing_line_mm (-1)"},
     {"eyelids_not_an_object", "eyes[0].eyelids = true: must be an object"},
     {"eyelids_opening_out_of_range", "eyes[0].eyelids.opening = 1.5: must be between 0 and 1"},

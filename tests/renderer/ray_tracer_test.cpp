@@ -126,6 +126,92 @@ TEST(PalpebralOpening, IsBoundedByTheParabolicMarginsAndClosesAtZero) {
   EXPECT_FALSE(open.contains({0, -0.999, 1}));
 }
 
+// A point of the lid sphere (radius 13.8, the default eye's 13.5 + 0.3) in
+// the head frame, at x and elevation e in the plane x = const.
+Point3 lid_point(double x, double elevation_deg) {
+  const double rho = std::sqrt(13.8 * 13.8 - x * x);
+  return {x, rho * std::sin(elevation_deg * kDegree), rho * std::cos(elevation_deg * kDegree)};
+}
+
+TEST(PalpebralOpening, TurnedMarginsMoveAlongTheLidSphere) {
+  // Unturned, the upper margin (4.5 mm at x = 0) sits at elevation
+  // asin(4.5 / 13.8) = 19.0314 deg, the lower (-5.5) at -23.4876 deg.
+  surfaces::PalpebralOpening open;
+  EXPECT_TRUE(open.contains(lid_point(0, 18.93)));
+  EXPECT_FALSE(open.contains(lid_point(0, 19.13)));
+  // Turned up 20 deg: at 39.0314 deg, height 13.8 sin(39.0314 deg) = 8.6905 mm.
+  open.upper_turn = surfaces::MarginTurn::by(20 * kDegree);
+  EXPECT_TRUE(open.contains(lid_point(0, 38.93)));
+  EXPECT_FALSE(open.contains(lid_point(0, 39.13)));
+  EXPECT_TRUE(open.contains({0, 8.68, std::sqrt(13.8 * 13.8 - 8.68 * 8.68)}));
+  EXPECT_FALSE(open.contains({0, 8.70, std::sqrt(13.8 * 13.8 - 8.70 * 8.70)}));
+  // At x = 7.5 the head-fixed upper margin is 3.125 mm high (see above); on
+  // the circle x = 7.5 (radius sqrt(13.8^2 - 7.5^2) = 11.5842) that is
+  // elevation asin(3.125 / 11.5842) = 15.6504 deg, turned to 35.6504 deg.
+  EXPECT_TRUE(open.contains(lid_point(7.5, 35.55)));
+  EXPECT_FALSE(open.contains(lid_point(7.5, 35.75)));
+  // The lower margin turned down 12 deg: -35.4876 deg.
+  open.lower_turn = surfaces::MarginTurn::by(-12 * kDegree);
+  EXPECT_TRUE(open.contains(lid_point(0, -35.39)));
+  EXPECT_FALSE(open.contains(lid_point(0, -35.59)));
+  EXPECT_TRUE(open.contains(lid_point(0, -24)));  // uncovered as the lower lid went down
+}
+
+TEST(PalpebralOpening, MarginsThatWouldCrossCloseTheOpeningInstead) {
+  // Upper margin turned down 45 deg, lower not: at x = 0 the upper would
+  // lie at 19.03 - 45 = -25.97 deg, below the lower (-23.49). Everywhere
+  // else too (at the canthi both margins meet at the closing line, turned
+  // apart the wrong way): no point of the sphere is in the opening.
+  surfaces::PalpebralOpening open;
+  open.upper_turn = surfaces::MarginTurn::by(-45 * kDegree);
+  for (double x = -13.5; x <= 13.5; x += 0.25) {
+    for (double e = -89.5; e <= 89.5; e += 0.25) {
+      ASSERT_FALSE(open.contains(lid_point(x, e))) << x << " " << e;
+    }
+  }
+  // Turned down 40 deg it still leaves a sliver: -20.97 to -23.49 deg.
+  open.upper_turn = surfaces::MarginTurn::by(-40 * kDegree);
+  EXPECT_TRUE(open.contains(lid_point(0, -22)));
+  EXPECT_FALSE(open.contains(lid_point(0, -20.5)));
+}
+
+TEST(PalpebralOpening, AMarginTurnedFarStillSplitsTheSphereByElevation) {
+  // A turn of 90 deg (the limit): the upper margin at 109.03 deg, past the
+  // top of the sphere, so every point in front is below it, even those
+  // whose turned-back elevation passes -90 deg.
+  surfaces::PalpebralOpening open;
+  open.upper_turn = surfaces::MarginTurn::by(90 * kDegree);
+  for (double e = -23.3; e <= 89.5; e += 0.5) EXPECT_TRUE(open.contains(lid_point(0, e))) << e;
+  open.upper_turn = {};
+  open.lower_turn = surfaces::MarginTurn::by(-90 * kDegree);  // the lower at -113.49 deg
+  for (double e = -89.5; e <= 18.9; e += 0.5) EXPECT_TRUE(open.contains(lid_point(0, e))) << e;
+}
+
+TEST(EyelidGazeFollowing, MarginTurnsAreGainTimesElevationBySign) {
+  // Elevation of the optical axis in the head frame (y up, z forward).
+  EXPECT_NEAR(surfaces::eye_elevation_rad({0, std::sin(30 * kDegree), std::cos(30 * kDegree)}), 30 * kDegree, 1e-15);
+  EXPECT_EQ(surfaces::eye_elevation_rad({std::sin(40 * kDegree), 0, std::cos(40 * kDegree)}), 0.0);  // horizontal
+  // Yaw 40, pitch 20 (optical_axis_from_yaw_pitch): (sin 40 cos 20, sin 20,
+  // cos 40 cos 20) in the head frame, elevation atan(tan 20 / cos 40) = 25.4138 deg.
+  const Vector3 o{std::sin(40 * kDegree) * std::cos(20 * kDegree), std::sin(20 * kDegree),
+                  std::cos(40 * kDegree) * std::cos(20 * kDegree)};
+  EXPECT_NEAR(surfaces::eye_elevation_rad(o) / kDegree, 25.413766880, 1e-8);
+  // The default gains: upper 1 both ways, lower 0 up and 0.6 down.
+  const Eyelids d;
+  const auto turns = [&](double elevation_deg) {
+    return surfaces::margin_turns(d.upper_gain_upgaze, d.upper_gain_downgaze, d.lower_gain_upgaze,
+                                  d.lower_gain_downgaze, elevation_deg * kDegree);
+  };
+  EXPECT_NEAR(turns(30).upper_rad, 30 * kDegree, 1e-15);
+  EXPECT_EQ(turns(30).lower_rad, 0.0);
+  EXPECT_NEAR(turns(-30).upper_rad, -30 * kDegree, 1e-15);
+  EXPECT_NEAR(turns(-30).lower_rad, -18 * kDegree, 1e-15);
+  EXPECT_EQ(turns(0).upper_rad, 0.0);
+  // Limited to +-90 deg.
+  EXPECT_DOUBLE_EQ(surfaces::margin_turns(2, 2, 2, 2, 60 * kDegree).upper_rad, std::numbers::pi / 2);
+  EXPECT_DOUBLE_EQ(surfaces::margin_turns(2, 2, 2, 2, -60 * kDegree).lower_rad, -std::numbers::pi / 2);
+}
+
 // ---------------------------------------------------------------------------
 // Cornea.
 
@@ -585,6 +671,97 @@ TEST(RayTracer, ClosedLidsCoverTheWholeCornea) {
     }
   }
   EXPECT_TRUE(tracer.occluded_except_cornea({100, 0, 0}, eye.corneal_apex()));
+}
+
+// An eye whose optical axis is turned by yaw and pitch (optical_axis_from_yaw_pitch)
+// about the centre of rotation (0, 0, 610), with these lids.
+Eye turned_eye_with_lids(const Eyelids& lids, double yaw_deg, double pitch_deg) {
+  Eye eye = Eye::with_rotation_center(keratometric_eye(), {0, 0, 610},
+                                      optical_axis_from_yaw_pitch(yaw_deg * kDegree, pitch_deg * kDegree));
+  EyeAppearance look;
+  look.eyelids = lids;
+  eye.set_appearance(look);
+  return eye;
+}
+
+Eyelids head_fixed_lids() {
+  Eyelids lids;
+  lids.upper_gain_upgaze = lids.upper_gain_downgaze = lids.lower_gain_upgaze = lids.lower_gain_downgaze = 0;
+  return lids;
+}
+
+// Whether the camera at the origin sees the lid at head-frame point (x,
+// elevation) of the lid sphere about (0, 0, 610), hit exactly there.
+bool sees_lid_at(const RayTracer& tracer, double x, double elevation_deg) {
+  const Point3 target = head_to_world({0, 0, 610}, lid_point(x, elevation_deg));
+  const Hit hit = tracer.intersect(ray_to({0, 0, 0}, target));
+  return hit.surface == Surface::skin && distance(hit.point, target) < 1e-9;
+}
+
+TEST(RayTracer, LidsTurnedUpWithTheGazeLeaveThePupilCentreVisible) {
+  // Gaze 30 deg up. The pupil centre is 13.5 - 3.6 = 9.9 mm from the centre
+  // of rotation, at head height 9.9 sin 30 = 4.95 mm: above the head-fixed
+  // upper margin (4.5 mm), under the lid. With the default upper gain of 1
+  // the margin turns up 30 deg too, to elevation 49.03 deg (10.42 mm).
+  const Eye with_gaze = turned_eye_with_lids(Eyelids{}, 0, 30);
+  const Eye head_fixed = turned_eye_with_lids(head_fixed_lids(), 0, 30);
+  EXPECT_NEAR(with_gaze.pupil_center().y, -4.95, 1e-12);
+  EXPECT_EQ(RayTracer(scene_of({with_gaze})).intersect(ray_to({0, 0, 0}, with_gaze.pupil_center())).surface,
+            Surface::cornea_anterior);
+  EXPECT_EQ(RayTracer(scene_of({head_fixed})).intersect(ray_to({0, 0, 0}, head_fixed.pupil_center())).surface,
+            Surface::skin);
+  // The margins, 0.1 deg either side: the upper at 49.03 deg, the lower
+  // (gain 0 in upgaze) where it was, -23.49 deg.
+  const RayTracer tracer(scene_of({with_gaze}));
+  EXPECT_FALSE(sees_lid_at(tracer, 0, 48.93));
+  EXPECT_TRUE(sees_lid_at(tracer, 0, 49.13));
+  EXPECT_FALSE(sees_lid_at(tracer, 0, -23.39));
+  EXPECT_TRUE(sees_lid_at(tracer, 0, -23.59));
+}
+
+TEST(RayTracer, LidsFollowADowngazeTheLowerOneLess) {
+  // Gaze 20 deg down: the upper margin turns to 19.03 - 20 = -0.97 deg
+  // (height -0.233 mm), the lower by 0.6 x 20 = 12 deg, to -35.49 deg
+  // (height -8.011 mm).
+  const RayTracer tracer(scene_of({turned_eye_with_lids(Eyelids{}, 0, -20)}));
+  EXPECT_FALSE(sees_lid_at(tracer, 0, -1.07));
+  EXPECT_TRUE(sees_lid_at(tracer, 0, -0.87));
+  EXPECT_FALSE(sees_lid_at(tracer, 0, -35.39));
+  EXPECT_TRUE(sees_lid_at(tracer, 0, -35.59));
+}
+
+TEST(RayTracer, HorizontalGazeAndZeroGainsLeaveTheMarginsWithTheHead) {
+  // Head-fixed margins: the upper at 19.03 deg at x = 0 and, at x = 7.5,
+  // 15.65 deg; the lower at -23.49 deg.
+  const auto expect_head_fixed_margins = [](const Eye& eye, const std::string& what) {
+    const RayTracer tracer(scene_of({eye}));
+    EXPECT_FALSE(sees_lid_at(tracer, 0, 18.93)) << what;
+    EXPECT_TRUE(sees_lid_at(tracer, 0, 19.13)) << what;
+    EXPECT_FALSE(sees_lid_at(tracer, 7.5, 15.55)) << what;
+    EXPECT_TRUE(sees_lid_at(tracer, 7.5, 15.75)) << what;
+    EXPECT_FALSE(sees_lid_at(tracer, 0, -23.39)) << what;
+    EXPECT_TRUE(sees_lid_at(tracer, 0, -23.59)) << what;
+  };
+  expect_head_fixed_margins(turned_eye_with_lids(Eyelids{}, 0, 0), "straight ahead");
+  expect_head_fixed_margins(turned_eye_with_lids(Eyelids{}, 35, 0), "35 deg right");
+  expect_head_fixed_margins(turned_eye_with_lids(Eyelids{}, -35, 0), "35 deg left");
+  expect_head_fixed_margins(turned_eye_with_lids(head_fixed_lids(), 0, 25), "gain 0, 25 deg up");
+  expect_head_fixed_margins(turned_eye_with_lids(head_fixed_lids(), 0, -25), "gain 0, 25 deg down");
+}
+
+TEST(RayTracer, RejectsEyelidGainsOutsideZeroToTwo) {
+  Eyelids lids;
+  lids.lower_gain_downgaze = NAN;
+  try {
+    RayTracer tracer(scene_of({turned_eye_with_lids(lids, 0, 0)}));
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "RayTracer: eyes[0] (keratometric): eyelids lower_gain_downgaze = nan: must be in [0, 2]");
+  }
+  lids.lower_gain_downgaze = 0.6;
+  lids.upper_gain_upgaze = -0.5;
+  EXPECT_THROW(RayTracer(scene_of({turned_eye_with_lids(lids, 0, 0)})), std::invalid_argument);
 }
 
 TEST(RayTracer, TheFacePlaneSurroundsTheLidsOutTo150Millimetres) {

@@ -250,6 +250,40 @@ TEST(RenderLabels, AMeshBetweenALightAndItsGlintMarksTheGlintOccluded) {
   EXPECT_GT(r.glints[1].electrons, 0.0);
 }
 
+// A lid across the pupil marks the border points it hides occluded, and
+// the label's ellipse stays the one fitted to the whole border (the pupil a
+// detector is asked to find), as docs/labels.md says.
+TEST(RenderLabels, ALidAcrossThePupilLeavesItsEllipseWhole) {
+  Scene scene = bundled("remote");
+  EyeAppearance look = scene.eyes[0].appearance();
+  ASSERT_TRUE(look.eyelids.has_value());
+  Eyelids& lids = *look.eyelids;
+  lids.upper_gain_upgaze = lids.upper_gain_downgaze = lids.lower_gain_upgaze = lids.lower_gain_downgaze = 0;
+  // The head-fixed upper margin at the pupil centre's height (about 2 mm).
+  lids.upper_margin_mm = dot(scene.eyes[0].pupil_center() - scene.eyes[0].rotation_center(), look.head_up);
+  scene.eyes[0].set_appearance(look);
+  const PupilTruth whole = compute_truth(scene).views[0].pupil;
+  ASSERT_TRUE(whole.ellipse_valid);
+
+  RenderOptions options;
+  options.samples_per_pixel = 1;
+  options.iris_cache_resolution = 5;
+  options.region = PixelRegion{0, 0, 8, 8};  // the labels do not depend on the region
+  const PupilTruth& label = render(scene, 0, options).truth.views[0].pupil;
+  int hidden = 0, seen = 0;
+  for (const PupilBorderPointTruth& b : label.border) {
+    hidden += b.status == PathStatus::occluded;
+    seen += b.status == PathStatus::ok;
+  }
+  EXPECT_GE(hidden, 10);
+  EXPECT_GE(seen, 10);
+  ASSERT_TRUE(label.ellipse_valid);
+  EXPECT_EQ(label.ellipse.center.u, whole.ellipse.center.u);
+  EXPECT_EQ(label.ellipse.center.v, whole.ellipse.center.v);
+  EXPECT_EQ(label.ellipse.semi_axis_1_px, whole.ellipse.semi_axis_1_px);
+  EXPECT_EQ(label.ellipse.semi_axis_2_px, whole.ellipse.semi_axis_2_px);
+}
+
 // ------------------------------------------------ glints agree with labels
 
 // Intensity-weighted centroid of the linear image within `radius` px of a

@@ -1,6 +1,6 @@
 #pragma once
 // How an eye and its surroundings look under near-infrared light: albedos,
-// the procedural iris texture, and the head-fixed eyelids and skin. Plain
+// the procedural iris texture, and the eyelids and skin. Plain
 // data; the renderer builds surfaces from it. Albedos are Lambertian
 // reflectances at about 850 nm.
 
@@ -11,17 +11,52 @@
 
 namespace purkinje {
 
-// Eyelids and the skin around them, fixed to the head (not to the eye: the
-// eye turns behind them). The lids lie on a sphere about the eye's centre
-// of rotation; the palpebral opening is bounded by two parabolic margins.
-// Heights are measured along the head's up direction from the centre of
-// rotation, on the plane facing forward.
+// Eyelids and the skin around them, attached to the head (not to the eye:
+// the eye turns behind them). The lids lie on a sphere about the eye's
+// centre of rotation; the palpebral opening is bounded by two parabolic
+// margins. Heights are measured along the head's up direction from the
+// centre of rotation, on the plane facing forward, for the eye in primary
+// position (optical axis along head_forward).
+//
+// The margins follow the eye's vertical rotation, as real lids do (lid-gaze
+// coupling). With e the eye's elevation (the angle of its optical axis
+// above head_forward in the head's vertical plane, atan2(o . up,
+// o . forward): positive up), each margin turns with the lid sphere about
+// the head's left-right axis through the centre of rotation by gain * e,
+// the gain chosen by the sign of e. Horizontal gaze leaves the margins
+// where they are. A gain of 0 keeps a margin fixed to the head. Where the
+// turned margins would cross (the upper one turned below the lower one),
+// the lids meet and the opening is closed there; each turn is limited to
+// +-90 deg.
+//
+// Default gains, static gaze (fixation), from the literature:
+// - Upper lid 1 in both directions: during steady fixation the upper lid
+//   and the eye take "essentially equal average positions" (Becker and
+//   Fuchs 1988, J Neurophysiol 60:1227-1252, search coils, vertical gaze).
+// - Lower lid 0.6 in downgaze: Read et al. 2006 (Optom Vis Sci 83:715-722,
+//   76 young adults) measure the vertical palpebral aperture shrinking
+//   from 9.7 to 6.4 mm between primary gaze and 40 deg downgaze; with the
+//   upper lid following 1:1 and these default margins (a 10 mm aperture),
+//   the lower margin must turn by 0.6 of the eye's rotation to leave that
+//   aperture seen along the line of sight (0.8 seen from straight ahead).
+// - Lower lid 0 in upgaze: the lower lid moves little and mostly in
+//   downgaze, pulled by its retractors from the inferior rectus. Leite et
+//   al. 2006 (Braz J Med Biol Res 39:1651-1657) measure lower-lid saccades
+//   of 2.2 mm against 9.2 mm of the upper lid in the same vertical
+//   saccades (young adults): a ratio of 0.24, which, with the 0.6 in
+//   downgaze, leaves about 0 for upgaze if the saccades spanned both
+//   sides of primary position equally.
 struct Eyelids {
   double opening = 1.0;             // 1: margins as given; 0: closed (both at the closing line)
   double upper_margin_mm = 4.5;     // upper lid margin height at the middle, fully open
   double lower_margin_mm = -5.5;    // lower lid margin height at the middle, fully open
   double closing_line_mm = -1.0;    // where the margins meet when closed
   double half_width_mm = 15.0;      // half the width of the opening (the canthi)
+  // Margin turn per eye elevation (see above), each in [0, 2].
+  double upper_gain_upgaze = 1.0;
+  double upper_gain_downgaze = 1.0;
+  double lower_gain_upgaze = 0.0;
+  double lower_gain_downgaze = 0.6;
 };
 
 struct EyeAppearance {

@@ -35,7 +35,10 @@ struct PupilBorderPointTruth {
 struct PupilTruth {
   std::vector<PupilBorderPointTruth> border;
   bool ellipse_valid = false;  // needs at least 6 border points with status ok
-  Ellipse ellipse;             // fitted (Halir-Flusser) to the ok border pixels
+  // Fitted (Halir-Flusser) to the ok border pixels of compute_truth. The
+  // renderer's visibility check marks points a lid hides occluded after the
+  // fit and keeps this ellipse: it stays the whole pupil's.
+  Ellipse ellipse;
   // The pupil centre seen through the cornea (its own refracted path).
   PathStatus refracted_center_status = PathStatus::no_solution;
   Pixel refracted_center;

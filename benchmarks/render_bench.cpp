@@ -17,6 +17,9 @@
 #include <cstdlib>
 #include <map>
 #include <string>
+#include <thread>
+#include <utility>
+#include <vector>
 
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
@@ -41,6 +44,7 @@ const RenderResult& converged(const std::string& name) {
     options.mode = RenderMode::reference;
     const char* spp = std::getenv("PURKINJE_BENCH_REFERENCE_SPP");
     options.samples_per_pixel = spp ? std::atoi(spp) : 1024;
+    options.edge_samples_per_pixel = 0;  // the same rays in every pixel
     options.reference_photons_per_light = std::int64_t{1} << 25;
     options.noise = false;
     options.seed = 12345;
@@ -69,12 +73,20 @@ double relative_error(const RenderResult& r, const RenderResult& ref) {
   return std::sqrt(sum_sq / n) / (sum_ref / lit);
 }
 
-void render_scene(benchmark::State& state, const std::string& name, RenderMode mode) {
+// Arguments: samples per pixel, and edge samples per pixel (adaptive
+// sampling; 0: off).
+RenderOptions bench_options(const benchmark::State& state, RenderMode mode) {
   RenderOptions options;
   options.mode = mode;
   options.reference_photons_per_light = std::int64_t{1} << 20;
   options.samples_per_pixel = static_cast<int>(state.range(0));
+  options.edge_samples_per_pixel = static_cast<int>(state.range(1));
   options.noise = false;
+  return options;
+}
+
+void render_scene(benchmark::State& state, const std::string& name, RenderMode mode) {
+  const RenderOptions options = bench_options(state, mode);
   RenderResult last;
   for (auto _ : state) {
     last = render(scene(name), 0, options);
@@ -90,10 +102,38 @@ void render_scene(benchmark::State& state, const std::string& name, RenderMode m
   state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
 }
 
+// Throughput as a data set is made: two images at once, one thread each
+// (no serial phases, no synchronisation), on a 2-core machine.
+void render_pairs(benchmark::State& state, const std::string& name) {
+  RenderOptions options = bench_options(state, RenderMode::fast);
+  options.threads = 1;
+  const Scene& s = scene(name);
+  for (auto _ : state) {
+    RenderResult a, b;
+    std::thread other([&] { b = render(s, 0, options); });
+    a = render(s, 0, options);
+    other.join();
+    benchmark::DoNotOptimize(a.electrons.values.data());
+    benchmark::DoNotOptimize(b.electrons.values.data());
+  }
+  state.counters["images_per_s"] = benchmark::Counter(2.0 * static_cast<double>(state.iterations()),
+                                                      benchmark::Counter::kIsRate);
+}
+
+void sampling_args(benchmark::internal::Benchmark* b) {
+  for (const auto& [spp, edge] : std::vector<std::pair<int, int>>{{1, 0}, {1, 4}, {1, 8}, {1, 16}, {2, 16}, {4, 0}, {8, 0}}) {
+    b->Args({spp, edge});
+  }
+}
+
 void BM_RenderRemote(benchmark::State& s) { render_scene(s, "remote", RenderMode::fast); }
 void BM_RenderHeadset(benchmark::State& s) { render_scene(s, "headset", RenderMode::fast); }
-BENCHMARK(BM_RenderRemote)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_RenderHeadset)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
+void BM_RenderRemotePairs(benchmark::State& s) { render_pairs(s, "remote"); }
+void BM_RenderHeadsetPairs(benchmark::State& s) { render_pairs(s, "headset"); }
+BENCHMARK(BM_RenderRemote)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadset)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemotePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetPairs)->Args({1, 8})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 // The brute-force mode at the same settings, for the side-by-side table
 // (2^20 photons per light: its photon tracing is a fixed cost per image).
 // Only at 1 sample per pixel unless PURKINJE_BENCH_ERROR=1: CI's brief run
@@ -105,8 +145,8 @@ const bool reference_benchmarks_registered = [] {
     auto* b = benchmark::RegisterBenchmark(
         (std::string("BM_Reference") + (name[0] == 'r' ? "Remote" : "Headset")).c_str(),
         [name](benchmark::State& s) { render_scene(s, name, RenderMode::reference); });
-    b->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
-    if (full) b->Arg(4)->Arg(16)->Arg(64);
+    b->Args({1, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+    if (full) b->Args({4, 0})->Args({16, 0})->Args({64, 0});
   }
   return true;
 }();

@@ -661,23 +661,24 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
     std::array<int, kClasses> counts{};
     std::array<PrimaryRecord, kClasses> first_of_class{};
     int cornea_hits = 0;
+    std::optional<UnitVector3> centre_ray;
     for (int s = 0; s < samples; ++s) {
-      // A per-pixel random shift decorrelates pixels; a pixel's first
-      // samples are the same whatever their number.
-      // One sample alone sits at the centre, exact where the radiance
-      // is linear across the pixel.
+      // One sample alone sits at the centre, exact where the radiance is
+      // linear across the pixel. More follow the R2 sequence with a
+      // per-pixel random shift, which decorrelates pixels.
       const auto [ou, ov] = samples == 1 ? std::array<double, 2>{0.5, 0.5} : subpixel_offset_r2(s, shift_u, shift_v);
       const Pixel image_position{x - 0.5 + ou, y - 0.5 + ov};
+      const UnitVector3 direction = camera.back_project(image_position);
+      if (samples == 1) centre_ray = direction;
       PrimaryRecord record;
-      integrator->sample({center, camera.back_project(image_position)}, image_position, pixel * edge_spp + s, sum,
-                         record);
+      integrator->sample({center, direction}, image_position, pixel * edge_spp + s, sum, record);
       const int c = static_cast<int>(record.pixel_class);
       if (counts[c]++ == 0) first_of_class[c] = record;
       cornea_hits += record.through_cornea ? 1 : 0;
     }
     // Natural vignetting: irradiance on the sensor falls as cos^4 of the
     // field angle.
-    const double cos_field = dot(camera.back_project({double(x), double(y)}), axis);
+    const double cos_field = dot(centre_ray ? *centre_ray : camera.back_project({double(x), double(y)}), axis);
     const double vignetting = cos_field * cos_field * cos_field * cos_field;
     result.radiance.at(x, y) = static_cast<float>(sum.radiance / samples);
     diffuse_electrons.at(x, y) = static_cast<float>(sum.electrons / samples * vignetting);

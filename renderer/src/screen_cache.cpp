@@ -27,10 +27,11 @@ void for_each_node(std::size_t count, const Body& body) {
 
 }  // namespace
 
-ScreenGrid::ScreenGrid(const Camera& camera, const PixelRegion& region, int spacing_px)
+ScreenGrid::ScreenGrid(const Camera& camera, const PixelRegion& region, int spacing_px,
+                       const FindDiffusePoint& find)
     : spacing_(spacing_px) {
   const Intrinsics& k = camera.intrinsics();
-  pixel_angle_ = 1.0 / std::max(k.fx, k.fy);
+  const double pixel_angle = 1.0 / std::max(k.fx, k.fy);
   // Samples of pixel x lie in [x - 0.5, x + 0.5]: nodes from the one at
   // or before x0 - 0.5 to the one at or after x1 - 0.5, so that no lookup
   // in the region is clamped and every lookup is the whole image's.
@@ -39,6 +40,14 @@ ScreenGrid::ScreenGrid(const Camera& camera, const PixelRegion& region, int spac
   j0_ = floor_div(region.y0 - 1, spacing_);
   nx_ = floor_div(region.x1 + spacing_ - 1, spacing_) - i0_ + 1;
   ny_ = floor_div(region.y1 + spacing_ - 1, spacing_) - j0_ + 1;
+  nodes_.resize(static_cast<std::size_t>(nx_) * ny_);
+  for_each_node(nodes_.size(), [&](std::size_t n) {
+    Node& node = nodes_[n];
+    node.point = find(position(n));
+    const double reach =
+        kReachSpacings * spacing_ * node.point.path_mm * pixel_angle / std::max(node.point.cos_view, kMinCosView);
+    if (reach > 0) node.inverse_reach_squared = 1 / (reach * reach);
+  });
 }
 
 Pixel ScreenGrid::position(std::size_t node) const {
@@ -52,8 +61,7 @@ std::uint64_t ScreenGrid::key(std::size_t node) const {
   return static_cast<std::uint64_t>(j + 1) << 32 | static_cast<std::uint32_t>(i + 1);
 }
 
-int ScreenGrid::corners(const Pixel& image_position, const DiffusePoint& p, const std::vector<DiffusePoint>& points,
-                        Corner out[4]) const {
+int ScreenGrid::corners(const Pixel& image_position, const DiffusePoint& p, Corner out[4]) const {
   // The cell and the place in it on the whole image's lattice, so that
   // the arithmetic is the same whatever the region.
   const auto locate = [](double g, int first, int count, int& cell, double& t) {
@@ -73,11 +81,10 @@ int ScreenGrid::corners(const Pixel& image_position, const DiffusePoint& p, cons
       const int i = ia + di, j = ja + dj;
       if (i >= nx_ || j >= ny_) continue;
       const std::size_t n = static_cast<std::size_t>(j) * nx_ + i;
-      const DiffusePoint& q = points[n];
+      const DiffusePoint& q = nodes_[n].point;
       if (q.surface != p.surface || q.owner != p.owner) continue;
       if (dot(q.normal, p.normal) < kMinNormalCos) continue;
-      const double reach = kReachSpacings * spacing_ * q.path_mm * pixel_angle_ / std::max(q.cos_view, kMinCosView);
-      const double d2 = (q.point - p.point).squared_norm() / (reach * reach);
+      const double d2 = (q.point - p.point).squared_norm() * nodes_[n].inverse_reach_squared;
       if (d2 >= 1) continue;
       // Never zero, so that a node exactly across the cell still counts.
       out[count++] = {n, (di ? tx : 1 - tx) * (dj ? ty : 1 - ty) * (1 - d2) + 1e-12};
@@ -88,18 +95,16 @@ int ScreenGrid::corners(const Pixel& image_position, const DiffusePoint& p, cons
 
 DiffuseCache::DiffuseCache(const Camera& camera, const PixelRegion& region, int spacing_px, std::size_t lights,
                            const FindDiffusePoint& find, const Gather& gather)
-    : grid_(camera, region, spacing_px), lights_(lights) {
-  points_.resize(grid_.size());
+    : grid_(camera, region, spacing_px, find), lights_(lights) {
   irradiance_.assign(grid_.size() * lights_, 0.0);
   for_each_node(grid_.size(), [&](std::size_t n) {
-    points_[n] = find(grid_.position(n));
-    if (points_[n].surface != Surface::none) gather(points_[n], grid_.key(n), &irradiance_[n * lights_]);
+    if (grid_.point(n).surface != Surface::none) gather(grid_.point(n), grid_.key(n), &irradiance_[n * lights_]);
   });
 }
 
 bool DiffuseCache::irradiance(const Pixel& image_position, const DiffusePoint& p, double* e) const {
   ScreenGrid::Corner corners[4];
-  const int count = grid_.corners(image_position, p, points_, corners);
+  const int count = grid_.corners(image_position, p, corners);
   if (count == 0) return false;
   std::fill(e, e + lights_, 0.0);
   double total = 0;
@@ -114,23 +119,22 @@ bool DiffuseCache::irradiance(const Pixel& image_position, const DiffusePoint& p
 
 VisibilityCache::VisibilityCache(const Camera& camera, const PixelRegion& region, int spacing_px,
                                  std::size_t lights, const FindDiffusePoint& find, const Lit& lit)
-    : grid_(camera, region, spacing_px), lights_(lights) {
+    : lights_(lights) {
   if (lights_ > kMaxLights) return;
-  points_.resize(grid_.size());
-  lit_.assign(grid_.size(), 0);
-  for_each_node(grid_.size(), [&](std::size_t n) {
-    points_[n] = find(grid_.position(n));
-    if (points_[n].surface == Surface::none) return;
+  const ScreenGrid& grid = grid_.emplace(camera, region, spacing_px, find);
+  lit_.assign(grid.size(), 0);
+  for_each_node(grid.size(), [&](std::size_t n) {
+    if (grid.point(n).surface == Surface::none) return;
     for (std::size_t k = 0; k < lights_; ++k) {
-      if (lit(points_[n], k)) lit_[n] |= std::uint64_t{1} << k;
+      if (lit(grid.point(n), k)) lit_[n] |= std::uint64_t{1} << k;
     }
   });
 }
 
 VisibilityCache::Agreement VisibilityCache::at(const Pixel& image_position, const DiffusePoint& p) const {
-  if (points_.empty()) return {};
+  if (!grid_) return {};
   ScreenGrid::Corner corners[4];
-  if (grid_.corners(image_position, p, points_, corners) < 4) return {};
+  if (grid_->corners(image_position, p, corners) < 4) return {};
   std::uint64_t all = ~std::uint64_t{0}, any = 0;
   for (const ScreenGrid::Corner& c : corners) {
     all &= lit_[c.node];

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "purkinje/models/camera.h"
@@ -40,10 +41,12 @@ using FindDiffusePoint = std::function<DiffusePoint(const Pixel& image_position)
 // same as the whole image's.
 class ScreenGrid {
  public:
-  ScreenGrid(const Camera& camera, const PixelRegion& region, int spacing_px);
+  // Finds every node's diffuse point, in parallel (call from inside the
+  // render's task arena).
+  ScreenGrid(const Camera& camera, const PixelRegion& region, int spacing_px, const FindDiffusePoint& find);
 
-  std::size_t size() const { return static_cast<std::size_t>(nx_) * ny_; }
-  Pixel position(std::size_t node) const;
+  std::size_t size() const { return nodes_.size(); }
+  const DiffusePoint& point(std::size_t node) const { return nodes_[node].point; }
   // The node's place on the whole image's lattice (for random numbers).
   std::uint64_t key(std::size_t node) const;
 
@@ -54,13 +57,18 @@ class ScreenGrid {
     std::size_t node;
     double weight;
   };
-  int corners(const Pixel& image_position, const DiffusePoint& p, const std::vector<DiffusePoint>& points,
-              Corner out[4]) const;
+  int corners(const Pixel& image_position, const DiffusePoint& p, Corner out[4]) const;
 
  private:
+  Pixel position(std::size_t node) const;
+
+  struct Node {
+    DiffusePoint point;
+    double inverse_reach_squared = 0;  // 1 / the distance its point serves, squared
+  };
   int spacing_ = 8;
   int i0_ = 0, j0_ = 0, nx_ = 0, ny_ = 0;  // node (i, j) sits at pixel ((i0 + i) s, (j0 + j) s)
-  double pixel_angle_ = 0;                 // radians per pixel
+  std::vector<Node> nodes_;
 };
 
 class DiffuseCache {
@@ -81,8 +89,7 @@ class DiffuseCache {
  private:
   ScreenGrid grid_;
   std::size_t lights_ = 0;
-  std::vector<DiffusePoint> points_;  // [node]
-  std::vector<double> irradiance_;    // [node][light]
+  std::vector<double> irradiance_;  // [node][light]
 };
 
 class VisibilityCache {
@@ -106,10 +113,9 @@ class VisibilityCache {
   Agreement at(const Pixel& image_position, const DiffusePoint& p) const;
 
  private:
-  ScreenGrid grid_;
+  std::optional<ScreenGrid> grid_;  // none: too many lights
   std::size_t lights_ = 0;
-  std::vector<DiffusePoint> points_;  // [node]
-  std::vector<std::uint64_t> lit_;    // [node], bit k: light k
+  std::vector<std::uint64_t> lit_;  // [node], bit k: light k
 };
 
 }  // namespace purkinje::renderer

@@ -199,20 +199,18 @@ class FastIntegrator final : public PathIntegrator {
         iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr,
                               options.iris_cache_resolution, visible);
       }
+      build_iris_indirect(static_cast<int>(e));
     }
-    // First the visibility cache: the gathers below look their shadows up
-    // in it too, wherever the camera sees the point they reach.
-    visibility_ = std::make_unique<VisibilityCache>(
-        camera, traced, kVisibilitySpacingPx,
-        lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
-        [this](const DiffusePoint& p, std::size_t light) { return lit(p.point, p.normal, lights_[light]); });
-    for (std::size_t e = 0; e < scene.eyes.size(); ++e) build_iris_indirect(static_cast<int>(e));
     diffuse_ = std::make_unique<DiffuseCache>(
         camera, traced, kDiffuseCacheSpacingPx,
         lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
         [this](const DiffusePoint& p, std::size_t node, double* e) {
           gather_hemisphere(p.point, p.normal, kDiffuseCacheRays, kCacheNodeStream, node, e);
         });
+    visibility_ = std::make_unique<VisibilityCache>(
+        camera, traced, kVisibilitySpacingPx,
+        lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
+        [this](const DiffusePoint& p, std::size_t light) { return lit(p.point, p.normal, lights_[light]); });
   }
 
   void sample(const Ray& ray, const Pixel& image_position, std::uint64_t path, Contribution& out,
@@ -242,9 +240,7 @@ class FastIntegrator final : public PathIntegrator {
       case Surface::mesh:
         if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
           if (!primary) {
-            const VisibilityCache::Agreement agreed = visibility_where_seen(ray, hit);
-            direct_light(hit, albedo * weight, [&](std::size_t k, double radiance) { out.add(radiance, lights_[k]); },
-                         &agreed);
+            direct_light(hit, albedo * weight, out);
             return;
           }
           // Where the camera sees the surface directly, shadows come from
@@ -277,15 +273,6 @@ class FastIntegrator final : public PathIntegrator {
         interface(ray, hit, depth, weight, out, primary);
         return;
     }
-  }
-
-  // What the visibility cache knows of the lights at a diffuse hit off
-  // the camera's own rays (gathered, or seen in the cornea's mirror): the
-  // nodes around where the camera would see the point, if it does.
-  VisibilityCache::Agreement visibility_where_seen(const Ray& ray, const Hit& hit) const {
-    const Projection seen = camera_.project(hit.point);
-    if (seen.status != ProjectionStatus::ok) return {};
-    return visibility_->at(seen.pixel, diffuse_point(ray, hit));
   }
 
   static DiffusePoint diffuse_point(const Ray& ray, const Hit& hit) {
@@ -462,10 +449,7 @@ class FastIntegrator final : public PathIntegrator {
       case Surface::skin:
       case Surface::sclera:
       case Surface::mesh:
-        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
-          const VisibilityCache::Agreement agreed = visibility_where_seen(ray, hit);
-          direct_light(hit, weight * albedo, add, &agreed);
-        }
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, weight * albedo, add);
         return;
       case Surface::iris: {
         const double albedo = diffuse_albedo(scene_, hit);

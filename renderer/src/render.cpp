@@ -172,6 +172,11 @@ double bright_pupil_radiance(const Eye& eye, const Point3& light, const Point3& 
   return rho * irradiance_w_m2 * std::exp(-x * x) / (std::numbers::pi * kFundusLobeRad * kFundusLobeRad);
 }
 
+int edge_samples_per_pixel(const RenderOptions& options) {
+  if (options.mode == RenderMode::reference) return options.samples_per_pixel;
+  return std::max(options.samples_per_pixel, options.edge_samples_per_pixel);
+}
+
 namespace {
 
 // Additive recurrence (the R2 sequence): well-spread points of the unit
@@ -204,8 +209,8 @@ class FastIntegrator final : public PathIntegrator {
     diffuse_ = std::make_unique<DiffuseCache>(
         camera, traced, kDiffuseCacheSpacingPx,
         lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
-        [this](const DiffusePoint& p, std::size_t node, double* e) {
-          gather_hemisphere(p.point, p.normal, kDiffuseCacheRays, kCacheNodeStream, node, e);
+        [this](const DiffusePoint& p, std::uint64_t key, double* e) {
+          gather_hemisphere(p.point, p.normal, kDiffuseCacheRays, kCacheNodeStream, key, e);
         });
     visibility_ = std::make_unique<VisibilityCache>(
         camera, traced, kVisibilitySpacingPx,
@@ -249,8 +254,7 @@ class FastIntegrator final : public PathIntegrator {
           // few percent.
           const DiffusePoint p = diffuse_point(ray, hit);
           const VisibilityCache::Agreement agreed = visibility_->at(primary->image_position, p);
-          direct_light(hit, albedo * weight, [&](std::size_t k, double radiance) { out.add(radiance, lights_[k]); },
-                       &agreed);
+          direct_light(hit, albedo * weight, out, &agreed);
           interreflection(p, albedo * weight, *primary, out);
         }
         return;
@@ -361,8 +365,9 @@ class FastIntegrator final : public PathIntegrator {
 
   // Lambertian surface lit directly by the point lights; `scaled_albedo`
   // carries the path weight.
-  void direct_light(const Hit& hit, double scaled_albedo, Contribution& out) const {
-    direct_light(hit, scaled_albedo, [&](std::size_t k, double radiance) { out.add(radiance, lights_[k]); });
+  void direct_light(const Hit& hit, double scaled_albedo, Contribution& out,
+                    const VisibilityCache::Agreement* agreed = nullptr) const {
+    direct_light(hit, scaled_albedo, [&](std::size_t k, double radiance) { out.add(radiance, lights_[k]); }, agreed);
   }
   // `agreed`: what the visibility cache knows of the lights here.
   template <typename AddPerLight>
@@ -376,7 +381,7 @@ class FastIntegrator final : public PathIntegrator {
       const double d2 = to_light.squared_norm();
       const double cos_theta = dot(n, to_light) / std::sqrt(d2);
       if (!(cos_theta > 0)) continue;
-      if (agreed && (agreed->known >> k & 1)) {
+      if (agreed && k < VisibilityCache::kMaxLights && (agreed->known >> k & 1)) {
         if (!(agreed->lit >> k & 1)) continue;
       } else if (tracer_.occluded(origin, l.position)) {
         continue;
@@ -436,7 +441,7 @@ class FastIntegrator final : public PathIntegrator {
       const double r = std::hypot(x, y);
       if (r > r_max) x *= r_max / r, y *= r_max / r;
       gather_hemisphere(eye.world_from_eye() * Point3{x, y, z}, n.vector(), kIndirectRays, 0.5, 0.5,
-                        &cache.irradiance[static_cast<std::size_t>(node) * cache.lights]);
+                        cache.irradiance.data() + static_cast<std::size_t>(node) * cache.lights);
     });
   }
 
@@ -623,7 +628,7 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   apply_visibility(scene, camera_index, tracer, result.truth);
 
   const int spp = options.samples_per_pixel;
-  const int edge_spp = std::max(spp, options.edge_samples_per_pixel);
+  const int edge_spp = edge_samples_per_pixel(options);
   const PixelRegion region = options.region.value_or(PixelRegion{0, 0, width, height});
   // Adaptive sampling looks at each pixel's neighbours: the first pass
   // traces a margin of one pixel around the region, cleared at the end.
@@ -652,7 +657,9 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   const Point3 center = camera.center();
   const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
 
-  // A pixel's samples from scratch: radiance, electrons and AOVs.
+  // A pixel's samples from scratch: radiance, electrons and AOVs. (A
+  // refined pixel traces its first-pass samples again when there were
+  // several: simpler than keeping every pixel's partial sums.)
   const auto render_pixel = [&](int x, int y, int samples) {
     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
     const double shift_u = uniform01(options.seed, kJitterStream, 2 * pixel);

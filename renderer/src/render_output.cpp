@@ -71,7 +71,7 @@ std::string render_labels_json(const Scene& scene, const RenderResult& result,
   render["mode"] = to_string(options.mode);
   render["samples_per_pixel"] = options.samples_per_pixel;
   // What adaptive sampling gave the pixels it refined (no more than the rest: off).
-  render["edge_samples_per_pixel"] = std::max(options.samples_per_pixel, options.edge_samples_per_pixel);
+  render["edge_samples_per_pixel"] = edge_samples_per_pixel(options);
   render["seed"] = options.seed;
   render["iris_cache_resolution"] = options.iris_cache_resolution;
   render["sensor"] = sensor_json(camera.sensor(), options.noise);

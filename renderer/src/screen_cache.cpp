@@ -63,23 +63,24 @@ std::uint64_t ScreenGrid::key(std::size_t node) const {
 
 int ScreenGrid::corners(const Pixel& image_position, const DiffusePoint& p, Corner out[4]) const {
   // The cell and the place in it on the whole image's lattice, so that
-  // the arithmetic is the same whatever the region.
+  // the arithmetic is the same whatever the region. Outside the lattice
+  // nothing serves; a region's own samples never are, by construction.
   const auto locate = [](double g, int first, int count, int& cell, double& t) {
+    if (!(g >= first && g < first + count - 1)) return false;  // also NaN
     const double floor_g = std::floor(g);
     cell = static_cast<int>(floor_g) - first;
     t = g - floor_g;
-    if (cell < 0) cell = 0, t = 0;
-    if (cell > count - 2) cell = std::max(count - 2, 0), t = 1;
+    return true;
   };
   int ia, ja;
   double tx, ty;
-  locate(image_position.u / spacing_, i0_, nx_, ia, tx);
-  locate(image_position.v / spacing_, j0_, ny_, ja, ty);
+  if (!locate(image_position.u / spacing_, i0_, nx_, ia, tx) || !locate(image_position.v / spacing_, j0_, ny_, ja, ty)) {
+    return 0;
+  }
   int count = 0;
   for (int dj = 0; dj < 2; ++dj) {
     for (int di = 0; di < 2; ++di) {
       const int i = ia + di, j = ja + dj;
-      if (i >= nx_ || j >= ny_) continue;
       const std::size_t n = static_cast<std::size_t>(j) * nx_ + i;
       const DiffusePoint& q = nodes_[n].point;
       if (q.surface != p.surface || q.owner != p.owner) continue;
@@ -98,7 +99,7 @@ DiffuseCache::DiffuseCache(const Camera& camera, const PixelRegion& region, int 
     : grid_(camera, region, spacing_px, find), lights_(lights) {
   irradiance_.assign(grid_.size() * lights_, 0.0);
   for_each_node(grid_.size(), [&](std::size_t n) {
-    if (grid_.point(n).surface != Surface::none) gather(grid_.point(n), grid_.key(n), &irradiance_[n * lights_]);
+    if (grid_.point(n).surface != Surface::none) gather(grid_.point(n), grid_.key(n), irradiance_.data() + n * lights_);
   });
 }
 
@@ -110,7 +111,7 @@ bool DiffuseCache::irradiance(const Pixel& image_position, const DiffusePoint& p
   double total = 0;
   for (int c = 0; c < count; ++c) {
     total += corners[c].weight;
-    const double* node = &irradiance_[corners[c].node * lights_];
+    const double* node = irradiance_.data() + corners[c].node * lights_;
     for (std::size_t l = 0; l < lights_; ++l) e[l] += corners[c].weight * node[l];
   }
   for (std::size_t l = 0; l < lights_; ++l) e[l] /= total;

@@ -8,8 +8,8 @@
 // drawn uniformly over the spherical cap within 30 deg of the scene's own
 // gaze, and a pupil radius drawn uniformly from [1, 4] mm; everything else
 // (lids, whose margins follow the turned eye's elevation, albedos, iris
-// texture, lights, sensor with its noise, 4 samples per pixel) is as the
-// scene and the renderer's defaults say. The detector sees only the 8-bit
+// texture, lights, sensor with its noise, sampling) is as the scene and
+// the renderer's defaults say. The detector sees only the 8-bit
 // sensor image; the label is the refracted pupil ellipse's centre of the
 // camera's view.
 //

@@ -43,9 +43,11 @@ struct RenderOptions {
   // Camera rays per pixel, low-discrepancy with a seeded shift; a single
   // ray goes through the pixel's centre.
   int samples_per_pixel = 1;
-  // Adaptive sampling: when larger than samples_per_pixel, the pixels that
-  // the first pass finds on outlines, textures or shadow edges are
-  // rendered again with this many rays. 0: off.
+  // Adaptive sampling (fast mode): when larger than samples_per_pixel, the
+  // pixels that the first pass finds on outlines, textures or shadow edges
+  // are rendered again with this many rays. 0: off. The reference mode
+  // samples every pixel alike: choosing pixels by their noisy first
+  // samples would bias it.
   int edge_samples_per_pixel = 16;
   std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
   bool noise = true;              // false: no shot or read noise whatever the sensor says
@@ -61,6 +63,10 @@ struct RenderOptions {
   // Called from worker threads with the fraction of rows done; must be thread-safe.
   std::function<void(double fraction)> progress;
 };
+
+// The rays a pixel that adaptive sampling refines gets: samples_per_pixel
+// when it is off (reference mode, or edge samples no more than samples).
+int edge_samples_per_pixel(const RenderOptions& options);
 
 // Pixel classes of the segmentation AOV ("id"): the first diffuse surface
 // seen through the cornea where the ray passes it; per pixel, the class

@@ -269,7 +269,7 @@ TEST(RenderLabels, ALidAcrossThePupilLeavesItsEllipseWhole) {
   options.samples_per_pixel = 1;
   options.iris_cache_resolution = 5;
   options.region = PixelRegion{0, 0, 8, 8};  // the labels do not depend on the region
-  const PupilTruth& label = render(scene, 0, options).truth.views[0].pupil;
+  const PupilTruth label = render(scene, 0, options).truth.views[0].pupil;
   int hidden = 0, seen = 0;
   for (const PupilBorderPointTruth& b : label.border) {
     hidden += b.status == PathStatus::occluded;

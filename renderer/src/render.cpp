@@ -701,32 +701,30 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
     cornea.at(x, y) = static_cast<float>(cornea_hits) / samples;
   };
 
-  // With edge samples, the first pass is half the progress.
-  const double progress_scale = edge_spp > spp ? 0.5 : 1.0;
-  std::atomic<int> rows_done{0};
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(traced.y0, traced.y1), [&](const tbb::blocked_range<int>& r) {
-      for (int y = r.begin(); y < r.end(); ++y) {
-        for (int x = traced.x0; x < traced.x1; ++x) render_pixel(x, y, spp);
-      }
-      if (options.progress) {
-        options.progress(progress_scale * (rows_done += static_cast<int>(r.size())) / (traced.y1 - traced.y0));
-      }
+  // Rows y0 <= y < y1 in parallel, reporting progress from `progress_from`
+  // over `progress_span`.
+  const auto each_row = [&](int y0, int y1, double progress_from, double progress_span, const auto& row) {
+    std::atomic<int> rows_done{0};
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y < r.end(); ++y) row(y);
+        if (options.progress) {
+          options.progress(progress_from + progress_span * (rows_done += static_cast<int>(r.size())) / (y1 - y0));
+        }
+      });
     });
+  };
+  // With edge samples, the first pass is half the progress.
+  const double first_pass_span = edge_spp > spp ? 0.5 : 1.0;
+  each_row(traced.y0, traced.y1, 0.0, first_pass_span, [&](int y) {
+    for (int x = traced.x0; x < traced.x1; ++x) render_pixel(x, y, spp);
   });
   if (edge_spp > spp) {
     const std::vector<std::uint8_t> edges = find_edges(result.radiance, id, coverage, region, traced);
-    const int rows = region.y1 - region.y0;
-    rows_done = 0;
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<int>(region.y0, region.y1), [&](const tbb::blocked_range<int>& r) {
-        for (int y = r.begin(); y < r.end(); ++y) {
-          for (int x = region.x0; x < region.x1; ++x) {
-            if (edges[static_cast<std::size_t>(y) * width + x]) render_pixel(x, y, edge_spp);
-          }
-        }
-        if (options.progress) options.progress(0.5 + 0.5 * (rows_done += static_cast<int>(r.size())) / rows);
-      });
+    each_row(region.y0, region.y1, first_pass_span, 1.0 - first_pass_span, [&](int y) {
+      for (int x = region.x0; x < region.x1; ++x) {
+        if (edges[static_cast<std::size_t>(y) * width + x]) render_pixel(x, y, edge_spp);
+      }
     });
     // The margin: outside the region, so left at 0 as promised.
     for (int y = traced.y0; y < traced.y1; ++y) {

@@ -33,9 +33,10 @@ std::vector<Light> lights_of(const Scene& scene, const Camera& camera);
 struct Contribution {
   double radiance = 0;
   double electrons = 0;
-  void add(double radiance_from_light, const Light& light) {
-    radiance += radiance_from_light;
-    electrons += radiance_from_light * light.electrons_per_radiance;
+  void add(double radiance_from_light, const Light& light) { add(radiance_from_light, light.electrons_per_radiance); }
+  void add(double radiance_from_lights, double electrons_per_radiance) {
+    radiance += radiance_from_lights;
+    electrons += radiance_from_lights * electrons_per_radiance;
   }
 };
 

@@ -55,16 +55,22 @@ enum Stream : std::uint64_t {
   kCacheMissStream = 4,
 };
 
-// The diffuse cache (screen_cache.h): node spacing, gather rays per node,
-// and the fewer rays gathered where no node serves a point.
-constexpr int kDiffuseCacheSpacingPx = 8;
+// The diffuse cache (screen_cache.h): node spacings, gather rays per node,
+// and the fewer rays gathered where no node serves a point. Coarse cells
+// whose corners differ by at most kDiffuseTolerance of the direct light
+// need no fine nodes: far from the eye, where interreflection is smooth
+// and small, that is most of a remote camera's image.
+constexpr GridSpacing kDiffuseCacheSpacing{32, 8};
+constexpr double kDiffuseTolerance = 0.0025;
 constexpr int kDiffuseCacheRays = 64;
 constexpr int kDiffuseMissRays = 16;
 // The visibility cache (screen_cache.h): its nodes trace every light's
-// shadow ray; a point between four that agree traces none. Two pixels
-// apart, no shadow in the bundled scenes is missed (the error against the
-// reference is the same to 4 digits as tracing every shadow ray).
-constexpr int kVisibilitySpacingPx = 2;
+// shadow ray; a point between four that agree traces none. Coarse nodes
+// every 8 px, and every 2 px in the coarse cells whose corners disagree or
+// see different surfaces: no shadow in the bundled scenes is missed (the
+// images are those of tracing every shadow ray), but a shadow narrower
+// than 8 px inside a cell whose four corners are lit would be.
+constexpr GridSpacing kVisibilitySpacing{8, 2};
 // A gathered ray's branches at the cornea are followed while they carry
 // this much of the ray's weight: what they gather is itself a few percent
 // of the image.
@@ -198,6 +204,11 @@ class FastIntegrator final : public PathIntegrator {
     const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
       return !tracer_.occluded_except_cornea(light, cornea);
     };
+    for (const Light& l : lights_) {
+      const auto same = std::find(group_electrons_.begin(), group_electrons_.end(), l.electrons_per_radiance);
+      group_of_light_.push_back(static_cast<std::size_t>(same - group_electrons_.begin()));
+      if (same == group_electrons_.end()) group_electrons_.push_back(l.electrons_per_radiance);
+    }
     iris_.resize(scene.eyes.size());
     for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
       for (const Light& l : lights_) {
@@ -205,15 +216,17 @@ class FastIntegrator final : public PathIntegrator {
                               options.iris_cache_resolution, visible);
       }
       build_iris_indirect(static_cast<int>(e));
+      build_iris_light(static_cast<int>(e), options.iris_cache_resolution);
     }
     diffuse_ = std::make_unique<DiffuseCache>(
-        camera, traced, kDiffuseCacheSpacingPx,
+        camera, traced, kDiffuseCacheSpacing,
         lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
         [this](const DiffusePoint& p, std::uint64_t key, double* e) {
           gather_hemisphere(p.point, p.normal, kDiffuseCacheRays, kCacheNodeStream, key, e);
-        });
+        },
+        [this](const DiffusePoint& p) { return unshadowed_irradiance(p.point, p.normal); }, kDiffuseTolerance);
     visibility_ = std::make_unique<VisibilityCache>(
-        camera, traced, kVisibilitySpacingPx,
+        camera, traced, kVisibilitySpacing,
         lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
         [this](const DiffusePoint& p, std::size_t light) { return lit(p.point, p.normal, lights_[light]); });
   }
@@ -260,11 +273,9 @@ class FastIntegrator final : public PathIntegrator {
         return;
       case Surface::iris: {
         const Point3 local = scene_.eyes[hit.eye].eye_from_world() * hit.point;
-        const double albedo = diffuse_albedo(scene_, hit);
-        const IrisIndirect& indirect = iris_indirect_[hit.eye];
-        for (std::size_t k = 0; k < lights_.size(); ++k) {
-          const double e = iris_[hit.eye][k].irradiance_w_m2(hit.point) + indirect.irradiance_w_m2(local, k);
-          out.add(weight * albedo * kInvPi * e, lights_[k]);
+        const double scaled_albedo = weight * diffuse_albedo(scene_, hit) * kInvPi;
+        for (std::size_t g = 0; g < group_electrons_.size(); ++g) {
+          out.add(scaled_albedo * iris_light_[hit.eye].at(local, g), group_electrons_[g]);
         }
         return;
       }
@@ -390,58 +401,103 @@ class FastIntegrator final : public PathIntegrator {
     }
   }
 
+  // Irradiance (W/m^2) at a point facing `normal` from every light it
+  // faces, shadows ignored.
+  double unshadowed_irradiance(const Point3& point, const Vector3& normal) const {
+    double e = 0;
+    for (const Light& l : lights_) {
+      const Vector3 to_light = l.position - point;
+      const double d2 = to_light.squared_norm();
+      e += std::max(0.0, dot(normal, to_light)) / (d2 * std::sqrt(d2)) * l.intensity_w_sr * kPerSquareMm;
+    }
+    return e;
+  }
+
   // Whether `light` lights a point facing `normal`.
   bool lit(const Point3& point, const Vector3& normal, const Light& light) const {
     return dot(normal, light.position - point) > 0 && !tracer_.occluded(point + normal * kRayOffsetMm, light.position);
   }
 
-  // Light that reaches the iris after one diffuse bounce elsewhere: iris
-  // light that the cornea's inner side reflects back (totally, beyond the
-  // critical angle) and lids and skin seen through the cornea. A few
-  // percent of the iris's light, more near the limbus, and smooth over the
-  // iris: so computed at the nodes of a coarse grid on the iris plane by
-  // gathering over the hemisphere (kIndirectRays low-discrepancy
-  // directions, cosine-distributed) and interpolated bilinearly.
-  struct IrisIndirect {
+  // A square grid of nodes on an eye's iris plane (eye frame, centred on
+  // the optical axis), `channels` values per node, interpolated bilinearly
+  // and clamped at the edges.
+  struct IrisGrid {
     double half_mm = 0, step_mm = 1;
     int side = 0;
-    std::size_t lights = 0;
-    std::vector<double> irradiance;  // [node][light], W/m^2
-    double irradiance_w_m2(const Point3& eye_frame_point, std::size_t light) const {
+    std::size_t channels = 0;
+    std::vector<double> values;  // [node][channel]
+    void resize(double half_size_mm, int nodes_per_side, std::size_t channel_count) {
+      half_mm = half_size_mm;
+      side = nodes_per_side;
+      step_mm = 2 * half_mm / (side - 1);
+      channels = channel_count;
+      values.assign(static_cast<std::size_t>(side) * side * channels, 0.0);
+    }
+    Point3 node_point(int node, double z_mm) const {
+      return {-half_mm + step_mm * (node % side), -half_mm + step_mm * (node / side), z_mm};
+    }
+    double* node_values(int node) { return values.data() + static_cast<std::size_t>(node) * channels; }
+    double at(const Point3& eye_frame_point, std::size_t channel) const {
       if (side == 0) return 0;
       const double fx = std::clamp((eye_frame_point.x + half_mm) / step_mm, 0.0, side - 1.0);
       const double fy = std::clamp((eye_frame_point.y + half_mm) / step_mm, 0.0, side - 1.0);
       const int x0 = std::min(static_cast<int>(fx), side - 2), y0 = std::min(static_cast<int>(fy), side - 2);
       const double tx = fx - x0, ty = fy - y0;
-      const auto at = [&](int x, int y) { return irradiance[(static_cast<std::size_t>(y) * side + x) * lights + light]; };
-      return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
-             ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+      const auto v = [&](int x, int y) { return values[(static_cast<std::size_t>(y) * side + x) * channels + channel]; };
+      return (1 - ty) * ((1 - tx) * v(x0, y0) + tx * v(x0 + 1, y0)) + ty * ((1 - tx) * v(x0, y0 + 1) + tx * v(x0 + 1, y0 + 1));
     }
   };
+
+  // Light that reaches the iris after one diffuse bounce elsewhere: iris
+  // light that the cornea's inner side reflects back (totally, beyond the
+  // critical angle) and lids and skin seen through the cornea. A few
+  // percent of the iris's light, more near the limbus, and smooth over the
+  // iris: so computed at the nodes of a coarse grid (channels: lights) by
+  // gathering over the hemisphere (kIndirectRays low-discrepancy
+  // directions, cosine-distributed).
   static constexpr int kIndirectSide = 13;
   static constexpr int kIndirectRays = 64;
 
   void build_iris_indirect(int eye_index) {
     const Eye& eye = scene_.eyes[eye_index];
     const EyeModel& m = eye.model();
-    IrisIndirect& cache = iris_indirect_[eye_index];
-    cache.side = kIndirectSide;
-    cache.lights = lights_.size();
-    cache.half_mm = m.iris_radius_mm;
-    cache.step_mm = 2 * cache.half_mm / (cache.side - 1);
-    cache.irradiance.assign(static_cast<std::size_t>(cache.side) * cache.side * cache.lights, 0.0);
+    IrisGrid& cache = iris_indirect_[eye_index];
+    cache.resize(m.iris_radius_mm, kIndirectSide, lights_.size());
     const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
     // Nodes outside the iris gather as if at its rim, so that lookups near
     // the rim interpolate between iris values.
     const double r_max = 0.98 * m.iris_radius_mm;
     const UnitVector3 n = eye.world_from_eye().rotation() * UnitVector3::unit_z();
     tbb::parallel_for(0, cache.side * cache.side, [&](int node) {
-      double x = -cache.half_mm + cache.step_mm * (node % cache.side);
-      double y = -cache.half_mm + cache.step_mm * (node / cache.side);
-      const double r = std::hypot(x, y);
-      if (r > r_max) x *= r_max / r, y *= r_max / r;
-      gather_hemisphere(eye.world_from_eye() * Point3{x, y, z}, n.vector(), kIndirectRays, 0.5, 0.5,
-                        cache.irradiance.data() + static_cast<std::size_t>(node) * cache.lights);
+      Point3 p = cache.node_point(node, z);
+      const double r = std::hypot(p.x, p.y);
+      if (r > r_max) p.x *= r_max / r, p.y *= r_max / r;
+      gather_hemisphere(eye.world_from_eye() * p, n.vector(), kIndirectRays, 0.5, 0.5, cache.node_values(node));
+    });
+  }
+
+  // The iris's irradiance from all lights, direct through the cornea and
+  // indirect, tabulated once per eye: a camera ray then looks up one value
+  // per group of lights (lights with one wavelength response add up)
+  // instead of every light's cache. Nodes at half the spacing of the
+  // lights' own caches, out to where an iris point's cell ends.
+  void build_iris_light(int eye_index, int cache_resolution) {
+    const Eye& eye = scene_.eyes[eye_index];
+    const EyeModel& m = eye.model();
+    IrisGrid& table = iris_light_[eye_index];
+    if (lights_.empty()) return;
+    const std::vector<IrisIrradianceCache>& direct = iris_[eye_index];
+    table.resize(direct.front().half_size_mm(), 2 * cache_resolution - 1, group_electrons_.size());
+    const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
+    const double r_max = direct.front().half_size_mm() + 1.5 * table.step_mm;
+    tbb::parallel_for(0, table.side * table.side, [&](int node) {
+      const Point3 local = table.node_point(node, z);
+      if (std::hypot(local.x, local.y) > r_max) return;
+      const Point3 world = eye.world_from_eye() * local;
+      double* e = table.node_values(node);
+      for (std::size_t k = 0; k < lights_.size(); ++k) {
+        e[group_of_light_[k]] += direct[k].irradiance_w_m2(world) + iris_indirect_[eye_index].at(local, k);
+      }
     });
   }
 
@@ -504,7 +560,11 @@ class FastIntegrator final : public PathIntegrator {
   const RayTracer& tracer_;
   std::vector<Light> lights_;
   std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
-  std::vector<IrisIndirect> iris_indirect_ = std::vector<IrisIndirect>(scene_.eyes.size());  // [eye]
+  std::vector<IrisGrid> iris_indirect_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: lights
+  // Lights with one wavelength response form a group (usually all of them).
+  std::vector<double> group_electrons_;        // [group]: electrons per unit radiance
+  std::vector<std::size_t> group_of_light_;    // [light]
+  std::vector<IrisGrid> iris_light_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: groups
   std::uint64_t seed_ = 0;
   std::unique_ptr<DiffuseCache> diffuse_;
   std::unique_ptr<VisibilityCache> visibility_;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -40,6 +41,13 @@ DiffusePoint plane_point(const Camera& camera, const Pixel& p, double split_x_mm
 }
 
 const PixelRegion kWhole{0, 0, kSize, kSize};
+// One level of nodes every 2 px, one every 8 px; two levels as the renderer's
+// visibility cache has them.
+const GridSpacing kTwoPx{2, 2}, kEightPx{8, 8}, kEightThenTwoPx{8, 2};
+
+// The diffuse cache's settling rule needs a direct irradiance; these tests
+// make it large so that only the cell's coherence and the tolerance decide.
+double direct_level(const DiffusePoint&) { return 1000.0; }
 
 TEST(VisibilityCache, AgreesWhereAllFourNodesAgreeAndKnowsNothingAtAShadowEdge) {
   const Camera camera = test_camera();
@@ -47,7 +55,7 @@ TEST(VisibilityCache, AgreesWhereAllFourNodesAgreeAndKnowsNothingAtAShadowEdge) 
   // Light 0 is blocked where x > 0 (the right half of the image); light 1
   // lights everything.
   const auto lit = [](const DiffusePoint& p, std::size_t light) { return light == 1 || p.point.x <= 0; };
-  const VisibilityCache cache(camera, kWhole, 2, 2, find, lit);
+  const VisibilityCache cache(camera, kWhole, kTwoPx, 2, find, lit);
 
   const Pixel left{10.3, 20.6}, right{50.2, 33.9}, at_edge{31.9, 40.0};
   const auto left_agreed = cache.at(left, find(left));
@@ -68,15 +76,14 @@ TEST(VisibilityCache, KnowsNothingWhereTheNodesSeeAnotherSurface) {
   // The plane's right part (x >= 0.5 mm, from u = 32) is another surface.
   const auto find = [&](const Pixel& p) { return plane_point(camera, p, 0.5); };
   const auto lit = [](const DiffusePoint&, std::size_t) { return true; };
-  const VisibilityCache cache(camera, kWhole, 2, 1, find, lit);
+  const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, lit);
   const Pixel near_seam{31.0, 10.0}, far_from_seam{20.0, 10.0};
   EXPECT_EQ(cache.at(near_seam, find(near_seam)).known, 0u);
   EXPECT_EQ(cache.at(far_from_seam, find(far_from_seam)).known, 1u);
 }
 
 // The known limit (docs/rendering.md): a shadow narrower than the node
-// spacing that falls between the nodes is not seen. The renderer's
-// spacing is 2 px.
+// spacing that falls between the nodes is not seen.
 TEST(VisibilityCache, AShadowBetweenNodesNarrowerThanTheSpacingIsMissed) {
   const Camera camera = test_camera();
   const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
@@ -85,11 +92,57 @@ TEST(VisibilityCache, AShadowBetweenNodesNarrowerThanTheSpacingIsMissed) {
   const auto x_at = [&](double u) { return (u - camera.intrinsics().cx) / camera.intrinsics().fx * kPlaneZ; };
   const double x0 = x_at(40.5), x1 = x_at(41.5);
   const auto lit = [&](const DiffusePoint& p, std::size_t) { return p.point.x < x0 || p.point.x > x1; };
-  const VisibilityCache cache(camera, kWhole, 2, 1, find, lit);
+  const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, lit);
   const Pixel in_stripe{41.0, 12.0};
   const auto agreed = cache.at(in_stripe, find(in_stripe));
   EXPECT_EQ(agreed.known, 1u);
   EXPECT_EQ(agreed.lit, 1u);  // wrong, as documented
+}
+
+// With two levels, the coarse cells about a shadow edge disagree, so the
+// fine nodes decide there: the same answers as fine nodes everywhere, from
+// fewer shadow tests.
+TEST(VisibilityCache, TwoLevelsAnswerAsTheFineLevelAloneAtAShadowEdge) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  std::atomic<int> fine_calls = 0, two_level_calls = 0;  // the nodes are found in parallel
+  std::atomic<int>* calls = &fine_calls;
+  const auto lit = [&](const DiffusePoint& p, std::size_t light) { return ++*calls, light == 1 || p.point.x <= 0; };
+  const VisibilityCache fine(camera, kWhole, kTwoPx, 2, find, lit);
+  calls = &two_level_calls;
+  const VisibilityCache two_levels(camera, kWhole, kEightThenTwoPx, 2, find, lit);
+  for (const Pixel p : {Pixel{10.3, 20.6}, Pixel{50.2, 33.9}, Pixel{31.9, 40.0}, Pixel{30.6, 2.2}, Pixel{33.1, 60.0}}) {
+    const auto a = fine.at(p, find(p)), b = two_levels.at(p, find(p));
+    EXPECT_EQ(a.known, b.known) << "at (" << p.u << ", " << p.v << ")";
+    EXPECT_EQ(a.lit, b.lit) << "at (" << p.u << ", " << p.v << ")";
+  }
+  // Coarse nodes at u, v = -8, 0, ..., 64 (10 x 10); then fine nodes only
+  // in the column of cells about the edge (u = 24 to 32): 5 columns of 34
+  // (v = -2, 0, ..., 64), less the 2 x 9 coarse ones among them. Fine
+  // nodes alone: 34 x 34.
+  EXPECT_EQ(two_level_calls, 2 * (10 * 10 + 5 * 34 - 2 * 9));
+  EXPECT_EQ(fine_calls, 2 * 34 * 34);
+}
+
+// The same limit with two levels is the coarse spacing: a shadow that
+// falls inside coarse cells whose four corners are all lit is not seen.
+// The renderer's coarse spacing is 8 px.
+TEST(VisibilityCache, WithTwoLevelsAShadowInsideALitCoarseCellIsMissed) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  // A stripe of shadow 3 px wide centred on u = 44, between the coarse
+  // nodes at u = 40 and u = 48.
+  const auto x_at = [&](double u) { return (u - camera.intrinsics().cx) / camera.intrinsics().fx * kPlaneZ; };
+  const double x0 = x_at(42.5), x1 = x_at(45.5);
+  const auto lit = [&](const DiffusePoint& p, std::size_t) { return p.point.x < x0 || p.point.x > x1; };
+  const Pixel in_stripe{44.0, 12.0};
+  const VisibilityCache fine(camera, kWhole, kTwoPx, 1, find, lit);
+  const auto seen = fine.at(in_stripe, find(in_stripe));
+  EXPECT_EQ(seen.known & seen.lit, 0u);  // shadowed or traced: never wrongly lit
+  const VisibilityCache two_levels(camera, kWhole, kEightThenTwoPx, 1, find, lit);
+  const auto missed = two_levels.at(in_stripe, find(in_stripe));
+  EXPECT_EQ(missed.known, 1u);
+  EXPECT_EQ(missed.lit, 1u);  // wrong, as documented
 }
 
 TEST(VisibilityCache, MoreLightsThanItHoldsLeavesEverythingToTheTracer) {
@@ -97,7 +150,7 @@ TEST(VisibilityCache, MoreLightsThanItHoldsLeavesEverythingToTheTracer) {
   const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
   int calls = 0;
   const auto lit = [&](const DiffusePoint&, std::size_t) { return ++calls, true; };
-  const VisibilityCache cache(camera, kWhole, 2, VisibilityCache::kMaxLights + 1, find, lit);
+  const VisibilityCache cache(camera, kWhole, kTwoPx, VisibilityCache::kMaxLights + 1, find, lit);
   EXPECT_EQ(calls, 0);
   const Pixel p{20, 20};
   EXPECT_EQ(cache.at(p, find(p)).known, 0u);
@@ -111,7 +164,7 @@ TEST(DiffuseCache, InterpolatesAConstantExactlyAndRefusesAnotherSurface) {
     e[0] += p.owner == 0 ? 2 : 7;
     e[1] += p.owner == 0 ? 3 : 9;
   };
-  const DiffuseCache cache(camera, kWhole, 8, 2, find, gather);
+  const DiffuseCache cache(camera, kWhole, kEightPx, 2, find, gather, direct_level, 0.0);
   double e[2];
   const Pixel left{13.7, 21.2};
   ASSERT_TRUE(cache.irradiance(left, find(left), e));
@@ -139,8 +192,8 @@ TEST(DiffuseCache, ARegionLooksUpExactlyWhatTheWholeImageDoes) {
     e[0] += static_cast<double>((key * 2654435761u) % 1000);
   };
   const PixelRegion region{17, 9, 30, 25};
-  const DiffuseCache whole(camera, kWhole, 8, 1, find, gather);
-  const DiffuseCache part(camera, region, 8, 1, find, gather);
+  const DiffuseCache whole(camera, kWhole, kEightPx, 1, find, gather, direct_level, 0.0);
+  const DiffuseCache part(camera, region, kEightPx, 1, find, gather, direct_level, 0.0);
   int checked = 0;
   for (double v = region.y0 - 0.5; v <= region.y1 - 0.5; v += 0.25) {
     for (double u = region.x0 - 0.5; u <= region.x1 - 0.5; u += 0.25) {
@@ -153,6 +206,61 @@ TEST(DiffuseCache, ARegionLooksUpExactlyWhatTheWholeImageDoes) {
     }
   }
   EXPECT_GT(checked, 3000);
+}
+
+// Two levels: where the coarse corners agree within the tolerance, no fine
+// node is gathered, and the value is the corners'.
+TEST(DiffuseCache, ASmoothFieldSettlesOnTheCoarseNodesAlone) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  std::atomic<int> gathers = 0;
+  // 2 W/m^2 plus a variation of at most 0.5 (0.05% of the direct 1000).
+  const auto gather = [&](const DiffusePoint&, std::uint64_t key, double* e) {
+    ++gathers;
+    e[0] += 2 + 0.5 * static_cast<double>(key % 7) / 6;
+  };
+  const DiffuseCache cache(camera, kWhole, GridSpacing{16, 8}, 1, find, gather, direct_level, 1e-3);
+  EXPECT_EQ(gathers, 6 * 6);  // the coarse nodes at u, v = -16, 0, ..., 64
+  double e = 0;
+  const Pixel p{21.3, 40.7};
+  ASSERT_TRUE(cache.irradiance(p, find(p), &e));
+  EXPECT_GE(e, 2.0);
+  EXPECT_LE(e, 2.5);
+}
+
+// Settled and unsettled cells side by side: a region still looks up exactly
+// what the whole image does, on both levels.
+TEST(DiffuseCache, WithTwoLevelsARegionLooksUpExactlyWhatTheWholeImageDoes) {
+  const Camera camera = test_camera();
+  const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
+  // Constant left of x = 0 (u = 31.5); right of it, values that differ from
+  // node to node by far more than the tolerance.
+  const auto gather = [&](const DiffusePoint& p, std::uint64_t key, double* e) {
+    e[0] += p.point.x < 0 ? 5.0 : static_cast<double>((key * 2654435761u) % 1000);
+  };
+  std::atomic<int> gathers_whole = 0;
+  const auto counted = [&](const DiffusePoint& p, std::uint64_t key, double* e) { ++gathers_whole, gather(p, key, e); };
+  const DiffuseCache whole(camera, kWhole, GridSpacing{16, 4}, 1, find, counted, direct_level, 1e-3);
+  // Coarse nodes at u, v = -16, 0, ..., 64 (6 x 6); fine nodes in the
+  // cells from u = 16 on (the cell from 16 to 32 has corners on both
+  // sides): 13 columns of 18 (v = -4, 0, ..., 64), less the 4 x 5 coarse
+  // ones among them.
+  EXPECT_EQ(gathers_whole, 6 * 6 + 13 * 18 - 4 * 5);
+  const PixelRegion region{9, 9, 47, 25};
+  const DiffuseCache part(camera, region, GridSpacing{16, 4}, 1, find, gather, direct_level, 1e-3);
+  int checked = 0;
+  for (double v = region.y0 - 0.5; v <= region.y1 - 0.5; v += 0.25) {
+    for (double u = region.x0 - 0.5; u <= region.x1 - 0.5; u += 0.25) {
+      double a = -1, b = -2;
+      const Pixel p{u, v};
+      ASSERT_TRUE(whole.irradiance(p, find(p), &a));
+      ASSERT_TRUE(part.irradiance(p, find(p), &b));
+      ASSERT_EQ(a, b) << "at (" << u << ", " << v << ")";
+      if (u < 15) ASSERT_DOUBLE_EQ(a, 5.0);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 9000);
 }
 
 }  // namespace

@@ -422,7 +422,9 @@ bool clip_to_box(const Box& box, const Point3& o, const Vector3& d, double& t0, 
       if (oa < lo || oa > hi) return false;
       continue;
     }
-    double ta = (lo - oa) / da, tb = (hi - oa) / da;
+    // One division per axis, not two: a ray's clip is on every query's path.
+    const double inverse = 1.0 / da;
+    double ta = (lo - oa) * inverse, tb = (hi - oa) * inverse;
     if (ta > tb) std::swap(ta, tb);
     t0 = std::max(t0, ta);
     t1 = std::min(t1, tb);

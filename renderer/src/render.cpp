@@ -722,8 +722,8 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   // several: simpler than keeping every pixel's partial sums.)
   const auto render_pixel = [&](int x, int y, int samples) {
     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
-    const double shift_u = uniform01(options.seed, kJitterStream, 2 * pixel);
-    const double shift_v = uniform01(options.seed, kJitterStream, 2 * pixel + 1);
+    const double shift_u = samples > 1 ? uniform01(options.seed, kJitterStream, 2 * pixel) : 0.0;
+    const double shift_v = samples > 1 ? uniform01(options.seed, kJitterStream, 2 * pixel + 1) : 0.0;
     Contribution sum;
     std::array<int, kClasses> counts{};
     std::array<PrimaryRecord, kClasses> first_of_class{};

@@ -418,7 +418,9 @@ void mesh_occluded_filter(const RTCFilterFunctionNArguments* args) {
 bool clip_to_box(const Box& box, const Point3& o, const Vector3& d, double& t0, double& t1) {
   for (int axis = 0; axis < 3; ++axis) {
     const double lo = box.lo[axis], hi = box.hi[axis], oa = o[axis], da = d[axis];
-    if (da == 0.0) {
+    // Parallel to the slab for any distance that matters (and 1 / da would
+    // overflow below this).
+    if (!(std::abs(da) > 1e-300)) {
       if (oa < lo || oa > hi) return false;
       continue;
     }

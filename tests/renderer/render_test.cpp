@@ -689,6 +689,49 @@ TEST(RenderLights, MoreLightsThanTheVisibilityCacheHoldsRenderFinite) {
   EXPECT_GT(sum_many, 10 * sum_one);
 }
 
+// The iris reads one table per eye that sums the lights with the same
+// wavelength response. Lights of two wavelengths must stay apart: with
+// one ray per pixel (no adaptive sampling, so both renders sample the
+// same points) the iris's electrons under both LEDs are those under each
+// alone, added.
+TEST(RenderLights, LightsOfTwoWavelengthsAddUpOnTheIris) {
+  Scene scene = bundled("headset");
+  scene.illuminators.resize(2);
+  scene.illuminators[1].wavelength_nm = 940;
+  RenderOptions options;
+  options.noise = false;
+  options.edge_samples_per_pixel = 0;
+  const PixelRegion region{170, 140, 230, 200};
+  options.region = region;
+  const RenderResult both = render(scene, 0, options);
+  const std::vector<Illuminator> lights = scene.illuminators;
+  scene.illuminators = {lights[0]};
+  const RenderResult first = render(scene, 0, options);
+  scene.illuminators = {lights[1]};
+  const RenderResult second = render(scene, 0, options);
+  const auto iris_all_around = [&](int x, int y) {
+    for (int dy = -3; dy <= 3; ++dy) {
+      for (int dx = -3; dx <= 3; ++dx) {
+        if (aov(both, "id").at(x + dx, y + dy) != static_cast<float>(PixelClass::iris)) return false;
+        for (const RenderResult* r : {&both, &first, &second}) {
+          if (aov(*r, "glint").at(x + dx, y + dy) != 0.0f) return false;
+        }
+      }
+    }
+    return true;
+  };
+  int checked = 0;
+  for (int y = region.y0 + 3; y < region.y1 - 3; ++y) {
+    for (int x = region.x0 + 3; x < region.x1 - 3; ++x) {
+      if (!iris_all_around(x, y)) continue;
+      const double sum = double(first.electrons.at(x, y)) + second.electrons.at(x, y);
+      ASSERT_NEAR(both.electrons.at(x, y), sum, 1e-5 * sum) << x << ", " << y;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 500);
+}
+
 TEST(RenderOptionsCheck, BadOptionsThrowNamingTheValue) {
   const Scene scene = bundled("headset");
   RenderOptions options;

@@ -456,7 +456,7 @@ class FastIntegrator final : public PathIntegrator {
   // gathering over the hemisphere (kIndirectRays low-discrepancy
   // directions, cosine-distributed).
   static constexpr int kIndirectSide = 13;
-  static constexpr int kIndirectRays = 64;
+  static constexpr int kIndirectRays = 32;
 
   void build_iris_indirect(int eye_index) {
     const Eye& eye = scene_.eyes[eye_index];
@@ -717,10 +717,19 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   const Point3 center = camera.center();
   const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
 
-  // A pixel's samples from scratch: radiance, electrons and AOVs. (A
-  // refined pixel traces its first-pass samples again when there were
-  // several: simpler than keeping every pixel's partial sums.)
-  const auto render_pixel = [&](int x, int y, int samples) {
+  // Natural vignetting: irradiance on the sensor falls as cos^4 of the
+  // field angle.
+  const auto vignetting_at = [&](const UnitVector3& centre_ray) {
+    const double cos_field = dot(centre_ray, axis);
+    return cos_field * cos_field * cos_field * cos_field;
+  };
+
+  // A pixel's samples: radiance, electrons and AOVs. With `centre` the
+  // first pass's lone centre sample, read back from the planes, is one of
+  // them and `samples - 1` more are traced. (A refined pixel traces its
+  // first-pass samples again when there were several: simpler than
+  // keeping every pixel's partial sums.)
+  const auto render_pixel = [&](int x, int y, int samples, bool centre) {
     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
     const double shift_u = samples > 1 ? uniform01(options.seed, kJitterStream, 2 * pixel) : 0.0;
     const double shift_v = samples > 1 ? uniform01(options.seed, kJitterStream, 2 * pixel + 1) : 0.0;
@@ -729,7 +738,19 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
     std::array<PrimaryRecord, kClasses> first_of_class{};
     int cornea_hits = 0;
     std::optional<UnitVector3> centre_ray;
-    for (int s = 0; s < samples; ++s) {
+    if (centre) {
+      PrimaryRecord& r = first_of_class[static_cast<int>(id.at(x, y))];
+      r.pixel_class = static_cast<PixelClass>(id.at(x, y));
+      r.depth_mm = depth.at(x, y);
+      r.hit = r.pixel_class != PixelClass::background;
+      r.normal = {nx.at(x, y), ny.at(x, y), nz.at(x, y)};
+      counts[static_cast<int>(r.pixel_class)] = 1;
+      cornea_hits = cornea.at(x, y) > 0 ? 1 : 0;
+      centre_ray = camera.back_project({double(x), double(y)});
+      sum.radiance = result.radiance.at(x, y);
+      sum.electrons = diffuse_electrons.at(x, y) / vignetting_at(*centre_ray);
+    }
+    for (int s = centre ? 1 : 0; s < samples; ++s) {
       // One sample alone sits at the centre, exact where the radiance is
       // linear across the pixel. More follow the R2 sequence with a
       // per-pixel random shift, which decorrelates pixels.
@@ -743,10 +764,7 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
       if (counts[c]++ == 0) first_of_class[c] = record;
       cornea_hits += record.through_cornea ? 1 : 0;
     }
-    // Natural vignetting: irradiance on the sensor falls as cos^4 of the
-    // field angle.
-    const double cos_field = dot(centre_ray ? *centre_ray : camera.back_project({double(x), double(y)}), axis);
-    const double vignetting = cos_field * cos_field * cos_field * cos_field;
+    const double vignetting = vignetting_at(centre_ray ? *centre_ray : camera.back_project({double(x), double(y)}));
     result.radiance.at(x, y) = static_cast<float>(sum.radiance / samples);
     diffuse_electrons.at(x, y) = static_cast<float>(sum.electrons / samples * vignetting);
 
@@ -777,13 +795,14 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   // With edge samples, the first pass is half the progress.
   const double first_pass_span = edge_spp > spp ? 0.5 : 1.0;
   each_row(traced.y0, traced.y1, 0.0, first_pass_span, [&](int y) {
-    for (int x = traced.x0; x < traced.x1; ++x) render_pixel(x, y, spp);
+    for (int x = traced.x0; x < traced.x1; ++x) render_pixel(x, y, spp, false);
   });
   if (edge_spp > spp) {
     const std::vector<std::uint8_t> edges = find_edges(result.radiance, id, coverage, region, traced);
     each_row(region.y0, region.y1, first_pass_span, 1.0 - first_pass_span, [&](int y) {
       for (int x = region.x0; x < region.x1; ++x) {
-        if (edges[static_cast<std::size_t>(y) * width + x]) render_pixel(x, y, edge_spp);
+        // After a lone centre sample, the refined pixel keeps it.
+        if (edges[static_cast<std::size_t>(y) * width + x]) render_pixel(x, y, edge_spp, spp == 1);
       }
     });
     // The margin: outside the region, so left at 0 as promised.

@@ -598,44 +598,60 @@ TEST(RenderGlints, PerLightMasksAddUpToTheGlintMask) {
   EXPECT_GT(largest, 0.5);  // some pixel is mostly glint
 }
 
-// Adaptive sampling: one ray through each pixel's centre, then 16 where
-// the first pass finds outlines, texture or shadow edges. Against 16 rays
-// in every pixel (the same rays where both trace 16) it must leave no
-// undersampled pixel behind: a missed outline pixel would differ by tens
-// of percent of the mean. Measured: RMSE 0.1% of the mean, worst pixel
-// 5.6% (sub-pixel iris texture), 41% of this eye region refined.
+// Adaptive sampling: one ray through each pixel's centre, then 15 more
+// where the first pass finds outlines, texture or shadow edges. Against 64
+// rays in every pixel it must be as close as 16 rays in every pixel are,
+// and leave no pixel at one ray that 16 rays get much closer: a missed
+// outline would be off by tens of percent of the mean. (Both miss a lit
+// sliver under a sixteenth of a pixel beside the lids' dark inner side.)
+// Measured: RMSE 1.06% of the mean (16 everywhere: 0.97%), a pixel left
+// at one ray at most 8.9% of the mean further off than 16 rays, 37% of
+// this eye region refined.
 TEST(RenderAdaptive, MatchesSixteenRaysEverywhereAtAFractionOfTheRays) {
   const Scene scene = bundled("headset");
   RenderOptions options;
   options.noise = false;
-  options.region = PixelRegion{100, 120, 300, 300};
+  const PixelRegion region{100, 120, 300, 300};
+  options.region = region;
   options.samples_per_pixel = 1;
+  options.edge_samples_per_pixel = 0;
+  const RenderResult centres = render(scene, 0, options);
   options.edge_samples_per_pixel = 16;
   const RenderResult adaptive = render(scene, 0, options);
   options.samples_per_pixel = 16;
   const RenderResult uniform = render(scene, 0, options);
-  double sum_sq = 0, sum = 0, worst = 0;
-  int pixels = 0, same = 0;
-  for (int y = 120; y < 300; ++y) {
-    for (int x = 100; x < 300; ++x) {
-      const double a = adaptive.radiance.at(x, y), u = uniform.radiance.at(x, y);
-      sum_sq += (a - u) * (a - u);
-      sum += u;
-      worst = std::max(worst, std::abs(a - u));
-      same += a == u ? 1 : 0;  // traced with the same 16 rays (refined)
+  options.samples_per_pixel = 64;
+  const RenderResult converged = render(scene, 0, options);
+  double adaptive_sq = 0, uniform_sq = 0, sum = 0, worst_unrefined = 0;
+  int pixels = 0, refined = 0;
+  for (int y = region.y0; y < region.y1; ++y) {
+    for (int x = region.x0; x < region.x1; ++x) {
+      const double a = adaptive.radiance.at(x, y), u = uniform.radiance.at(x, y), c = converged.radiance.at(x, y);
+      adaptive_sq += (a - c) * (a - c);
+      uniform_sq += (u - c) * (u - c);
+      sum += c;
+      if (a == centres.radiance.at(x, y)) {
+        // How much worse than 16 rays a pixel left at one ray is.
+        worst_unrefined = std::max(worst_unrefined, std::abs(a - c) - std::abs(u - c));
+      } else {
+        ++refined;
+      }
       ++pixels;
     }
   }
   const double mean = sum / pixels;
-  RecordProperty("relative_rmse", std::to_string(std::sqrt(sum_sq / pixels) / mean));
-  RecordProperty("worst_over_mean", std::to_string(worst / mean));
-  RecordProperty("refined_fraction", std::to_string(double(same) / pixels));
-  EXPECT_LT(std::sqrt(sum_sq / pixels) / mean, 0.002);
-  EXPECT_LT(worst / mean, 0.1);
+  const double adaptive_rmse = std::sqrt(adaptive_sq / pixels) / mean;
+  const double uniform_rmse = std::sqrt(uniform_sq / pixels) / mean;
+  RecordProperty("adaptive_relative_rmse", std::to_string(adaptive_rmse));
+  RecordProperty("uniform_relative_rmse", std::to_string(uniform_rmse));
+  RecordProperty("worst_unrefined_excess_over_mean", std::to_string(worst_unrefined / mean));
+  RecordProperty("refined_fraction", std::to_string(double(refined) / pixels));
+  EXPECT_LT(adaptive_rmse, 1.25 * uniform_rmse);
+  EXPECT_LT(worst_unrefined / mean, 0.1);
   // The eye, its lids and their shadows are refined; most of the skin is
   // not (this region holds no background, whose zeros would agree anyway).
-  EXPECT_GT(same, pixels / 20);
-  EXPECT_LT(same, pixels / 2);
+  EXPECT_GT(refined, pixels / 20);
+  EXPECT_LT(refined, pixels / 2);
 }
 
 // Edge detection looks one pixel beyond a region and the caches' lattices

@@ -61,7 +61,7 @@ enum Stream : std::uint64_t {
 // need no fine nodes: far from the eye, where interreflection is smooth
 // and small, that is most of a remote camera's image.
 constexpr GridSpacing kDiffuseCacheSpacing{32, 8};
-constexpr double kDiffuseTolerance = 0.0025;
+constexpr double kDiffuseTolerance = 0.005;
 constexpr int kDiffuseCacheRays = 64;
 constexpr int kDiffuseMissRays = 16;
 // The visibility cache (screen_cache.h): its nodes trace every light's

@@ -57,13 +57,14 @@ void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* 
 // the cornea or nothing.
 double diffuse_albedo(const Scene& scene, const Hit& hit);
 
-// One camera sample's radiance: the ray through `image_position`. `path`
-// numbers the sample uniquely within the image (pixel and sample index),
-// for integrators that draw random numbers along the path.
+// One camera sample's radiance: the ray through `image_position`, whose
+// first hit the caller has found (camera rays are traced in packets).
+// `path` numbers the sample uniquely within the image (pixel and sample
+// index), for integrators that draw random numbers along the path.
 class PathIntegrator {
  public:
   virtual ~PathIntegrator() = default;
-  virtual void sample(const Ray& ray, const Pixel& image_position, std::uint64_t path,
+  virtual void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
                       Contribution& out, PrimaryRecord& record) const = 0;
 };
 

@@ -50,8 +50,11 @@
 //
 // Precision. Embree traces float rays. The callbacks ignore the float ray
 // and intersect the caller's double ray, which the query context carries
-// (indexed by the Embree ray's id, so that ray packets can be added
-// later); the float ray serves traversal only. To keep that traversal
+// (indexed by the Embree ray's id: Embree may reorder a packet's rays
+// before calling back); the float ray serves traversal only. Packets of 16
+// (rtcIntersect16, for camera rays) find exactly the hits of single rays:
+// the double-precision callbacks decide, the float traversal only has to
+// be conservative. To keep that traversal
 // conservative, the float ray starts where the double ray enters the
 // scene's bounds (its origin then has millimetre-sized coordinates), the
 // geometry bounds are padded and the float tfar is rounded up. Each
@@ -712,6 +715,42 @@ struct RayTracer::Impl {
     }
   }
 
+  // run<false> for up to 16 lanes in one packet (coherent rays, such as
+  // neighbouring camera rays, share the traversal).
+  void run16(Lane* lanes, std::size_t count) const {
+    alignas(64) RTCRayHit16 rayhit;
+    alignas(64) int valid[16] = {};
+    bool any = false;
+    for (std::size_t i = 0; i < count; ++i) {
+      Lane& lane = lanes[i];
+      double t0 = lane.t_lo, t1 = lane.t_hi;
+      if (empty || !(t0 < t1) || !clip_to_box(bounds, lane.origin, lane.direction, t0, t1)) continue;
+      lane.t_shift = t0;
+      const Point3 start = lane.origin + lane.direction * t0;
+      rayhit.ray.org_x[i] = static_cast<float>(start.x);
+      rayhit.ray.org_y[i] = static_cast<float>(start.y);
+      rayhit.ray.org_z[i] = static_cast<float>(start.z);
+      rayhit.ray.tnear[i] = 0.0f;
+      rayhit.ray.dir_x[i] = static_cast<float>(lane.direction.x);
+      rayhit.ray.dir_y[i] = static_cast<float>(lane.direction.y);
+      rayhit.ray.dir_z[i] = static_cast<float>(lane.direction.z);
+      rayhit.ray.time[i] = 0.0f;
+      rayhit.ray.tfar[i] = embree_far(t1 - t0);
+      rayhit.ray.mask[i] = ~0u;
+      rayhit.ray.id[i] = static_cast<unsigned>(i);  // the lane
+      rayhit.ray.flags[i] = 0;
+      rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+      rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+      valid[i] = -1;
+      any = true;
+    }
+    if (!any) return;
+    Query query;
+    rtcInitIntersectContext(&query.embree);
+    query.lanes = lanes;
+    rtcIntersect16(valid, scene, &query.embree, &rayhit);
+  }
+
   bool occluded(const Point3& from, const Point3& to, bool skip_cornea) const {
     const Vector3 v = to - from;
     check_ray(from, v, 0, 0);
@@ -830,16 +869,19 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
 
 RayTracer::~RayTracer() = default;
 
-Hit RayTracer::intersect(const Ray& ray) const {
-  check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
-  Hit hit;
-  if (!(ray.t_min < ray.t_max)) return hit;
+namespace {
+
+Lane lane_of(const Ray& ray) {
   Lane lane;
   lane.origin = ray.origin;
   lane.direction = ray.direction;
   lane.t_lo = ray.t_min;
   lane.t_hi = ray.t_max;
-  impl_->run<false>(lane, false);
+  return lane;
+}
+
+Hit hit_of(const Ray& ray, const Lane& lane) {
+  Hit hit;
   if (!lane.found()) return hit;
   if (lane.mesh) {
     hit.surface = Surface::mesh;
@@ -855,6 +897,32 @@ Hit RayTracer::intersect(const Ray& ray) const {
   hit.point = ray.origin + ray.direction * lane.t_hi;
   hit.front_face = dot(ray.direction, hit.normal) < 0;
   return hit;
+}
+
+}  // namespace
+
+Hit RayTracer::intersect(const Ray& ray) const {
+  check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
+  if (!(ray.t_min < ray.t_max)) return {};
+  Lane lane = lane_of(ray);
+  impl_->run<false>(lane, false);
+  return hit_of(ray, lane);
+}
+
+void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  if (rays.size() != hits.size()) {
+    throw std::invalid_argument("RayTracer::intersect: " + std::to_string(rays.size()) + " rays but room for " +
+                                std::to_string(hits.size()) + " hits");
+  }
+  for (const Ray& ray : rays) check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
+  constexpr std::size_t kPacket = 16;
+  for (std::size_t first = 0; first < rays.size(); first += kPacket) {
+    const std::size_t count = std::min(kPacket, rays.size() - first);
+    Lane lanes[kPacket];
+    for (std::size_t i = 0; i < count; ++i) lanes[i] = lane_of(rays[first + i]);
+    impl_->run16(lanes, count);
+    for (std::size_t i = 0; i < count; ++i) hits[first + i] = hit_of(rays[first + i], lanes[i]);
+  }
 }
 
 bool RayTracer::occluded(const Point3& from, const Point3& to) const {

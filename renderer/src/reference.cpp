@@ -293,16 +293,20 @@ class ReferenceIntegrator final : public PathIntegrator {
     }
   }
 
-  void sample(const Ray& ray, const Pixel&, std::uint64_t path, Contribution& out,
+  void sample(const Ray& ray, const Hit& first_hit, const Pixel&, std::uint64_t path, Contribution& out,
               PrimaryRecord& record) const override {
     PathSampler rng(seed_, path);
-    trace(ray, 0, 0, 1.0, rng, out, &record);
+    trace(ray, first_hit, 0, 0, 1.0, rng, out, &record);
   }
 
  private:
   void trace(const Ray& ray, int depth, int bounces, double weight, PathSampler& rng, Contribution& out,
              PrimaryRecord* record) const {
-    const Hit hit = tracer_.intersect(ray);
+    trace(ray, tracer_.intersect(ray), depth, bounces, weight, rng, out, record);
+  }
+  // The same, where the ray's first hit is known.
+  void trace(const Ray& ray, const Hit& hit, int depth, int bounces, double weight, PathSampler& rng,
+             Contribution& out, PrimaryRecord* record) const {
     record_hit(hit, camera_, depth, record);
     switch (hit.surface) {
       case Surface::none:

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <span>
 #include <vector>
 
 #include "../../renderer/src/surfaces.h"
@@ -1065,6 +1066,50 @@ TEST(RayTracer, ConcurrentQueriesAgreeWithSerialOnes) {
     ASSERT_EQ(parallel[i].point, serial[i].point) << i;
     ASSERT_EQ(blocked[i] != 0, serial[i].surface != Surface::none) << i;
   }
+}
+
+// Packets of 16 share Embree's traversal but must find exactly what one
+// ray at a time finds: eyes, lids, meshes, misses, empty intervals, and a
+// count that is not a multiple of 16.
+TEST(RayTracer, PacketsFindTheSameHitsAsOneRayAtATime) {
+  Mesh mesh = two_triangles();
+  for (Point3& v : mesh.vertices) v = v + Vector3{-15, -5, 480};  // in front of the eye, in view
+  const RayTracer tracer(scene_of({eye_with_lids(Eyelids{})}, {mesh}));
+  std::vector<Ray> rays;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> offset(-25, 25);
+  for (int i = 0; i < 4003; ++i) {
+    Ray ray = ray_to({0, 0, 0}, {offset(rng), offset(rng), 600});
+    if (i % 97 == 0) ray.t_max = ray.t_min;  // an empty interval: nothing
+    if (i % 89 == 0) ray.t_max = 590;        // stops short of the eye
+    rays.push_back(ray);
+  }
+  // From inside the anterior chamber (the apex is at z = 596.5, 1.1 mm
+  // deeper 4 mm off the axis), on to the pupil and the iris.
+  std::uniform_real_distribution<double> inside(-2.8, 2.8);
+  for (int i = 0; i < 300; ++i) rays.push_back({{inside(rng), inside(rng), 598}, UnitVector3::unit_z()});
+  std::vector<Hit> packed(rays.size());
+  tracer.intersect(std::span<const Ray>(rays), std::span<Hit>(packed));
+  std::array<int, 8> seen{};
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Hit one = tracer.intersect(rays[i]);
+    ASSERT_EQ(packed[i].surface, one.surface) << i;
+    ASSERT_EQ(packed[i].eye, one.eye) << i;
+    ASSERT_EQ(packed[i].mesh, one.mesh) << i;
+    ASSERT_EQ(packed[i].triangle, one.triangle) << i;
+    ASSERT_EQ(packed[i].t, one.t) << i;
+    ASSERT_EQ(packed[i].point, one.point) << i;
+    ASSERT_EQ(packed[i].normal.vector(), one.normal.vector()) << i;
+    ASSERT_EQ(packed[i].front_face, one.front_face) << i;
+    ++seen[static_cast<int>(one.surface)];
+  }
+  // The rays met every kind of surface, and missed too.
+  for (const Surface s : {Surface::none, Surface::skin, Surface::sclera, Surface::iris, Surface::pupil,
+                          Surface::cornea_anterior, Surface::mesh}) {
+    EXPECT_GT(seen[static_cast<int>(s)], 0) << to_string(s);
+  }
+  std::vector<Hit> too_few(rays.size() - 1);
+  EXPECT_THROW(tracer.intersect(std::span<const Ray>(rays), std::span<Hit>(too_few)), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------

@@ -19,6 +19,7 @@
 
 #include <limits>
 #include <memory>
+#include <span>
 
 #include "purkinje/models/geometry.h"
 #include "purkinje/models/scene.h"
@@ -70,6 +71,10 @@ class RayTracer {
   // The closest hit with t_min < t < t_max. Throws std::invalid_argument
   // for a non-finite origin or t_min < 0; an empty interval hits nothing.
   Hit intersect(const Ray& ray) const;
+  // The closest hit of each ray, as intersect(ray) finds it, traced in
+  // packets of 16: cheaper for coherent rays such as neighbouring camera
+  // rays. `hits` must be as long as `rays`.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
   // Whether any surface (meshes included) lies on the open segment between
   // two points (both ends trimmed by 1e-6 of the length + 1e-9 mm, so a
   // segment may start or end on a surface). The cornea counts: light does

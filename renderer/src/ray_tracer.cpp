@@ -915,12 +915,19 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
                                 std::to_string(hits.size()) + " hits");
   }
   for (const Ray& ray : rays) check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
-  constexpr std::size_t kPacket = 16;
+  constexpr std::size_t kPacket = 16, kMinPacket = 4;
   for (std::size_t first = 0; first < rays.size(); first += kPacket) {
     const std::size_t count = std::min(kPacket, rays.size() - first);
     Lane lanes[kPacket];
     for (std::size_t i = 0; i < count; ++i) lanes[i] = lane_of(rays[first + i]);
-    impl_->run16(lanes, count);
+    if (count < kMinPacket) {
+      // A packet this thin costs more than its rays one by one.
+      for (std::size_t i = 0; i < count; ++i) {
+        if (rays[first + i].t_min < rays[first + i].t_max) impl_->run<false>(lanes[i], false);
+      }
+    } else {
+      impl_->run16(lanes, count);
+    }
     for (std::size_t i = 0; i < count; ++i) hits[first + i] = hit_of(rays[first + i], lanes[i]);
   }
 }

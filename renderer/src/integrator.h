@@ -61,11 +61,15 @@ double diffuse_albedo(const Scene& scene, const Hit& hit);
 // first hit the caller has found (camera rays are traced in packets).
 // `path` numbers the sample uniquely within the image (pixel and sample
 // index), for integrators that draw random numbers along the path.
+// `reflection_weight` scales what the cornea reflects into the sample: a
+// pixel may trace its reflection in one sample for several (the fast
+// mode's refined pixels); 0 leaves it to another sample. The reference
+// is only ever given 1.
 class PathIntegrator {
  public:
   virtual ~PathIntegrator() = default;
   virtual void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
-                      Contribution& out, PrimaryRecord& record) const = 0;
+                      Contribution& out, PrimaryRecord& record, double reflection_weight = 1) const = 0;
 };
 
 // A ray meeting a corneal interface: which side it comes from, the Fresnel

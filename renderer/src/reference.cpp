@@ -294,7 +294,7 @@ class ReferenceIntegrator final : public PathIntegrator {
   }
 
   void sample(const Ray& ray, const Hit& first_hit, const Pixel&, std::uint64_t path, Contribution& out,
-              PrimaryRecord& record) const override {
+              PrimaryRecord& record, double /*reflection_weight: always 1 here*/) const override {
     PathSampler rng(seed_, path);
     trace(ray, first_hit, 0, 0, 1.0, rng, out, &record);
   }

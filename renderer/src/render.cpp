@@ -233,8 +233,8 @@ class FastIntegrator final : public PathIntegrator {
   }
 
   void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
-              Contribution& out, PrimaryRecord& record) const override {
-    const Primary primary{&record, image_position, path};
+              Contribution& out, PrimaryRecord& record, double reflection_weight) const override {
+    const Primary primary{&record, image_position, path, reflection_weight};
     trace(ray, first_hit, 0, 1.0, out, &primary);
   }
 
@@ -244,6 +244,7 @@ class FastIntegrator final : public PathIntegrator {
     PrimaryRecord* record;
     Pixel image_position;
     std::uint64_t path;
+      double reflection_weight = 1;  // of the branches the cornea reflects off this chain
   };
 
   // Radiance arriving along `ray`, times `weight`, added to `out`.
@@ -569,9 +570,12 @@ class FastIntegrator final : public PathIntegrator {
         trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w, out, primary);
       }
     }
+    // Which reflections are traced does not depend on the sample's share
+    // of its pixel's reflection; their weight does.
     const double w_reflected = weight * c.reflectance;
-    if (w_reflected > kMinBranchWeight && c.reflected) {
-      trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected, out, nullptr);
+    const double share = primary ? primary->reflection_weight : 1.0;
+    if (w_reflected > kMinBranchWeight && c.reflected && share > 0) {
+      trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected * share, out, nullptr);
     }
   }
 
@@ -779,9 +783,17 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
       sum.radiance = result.radiance.at(x, y);
       sum.electrons = diffuse_electrons.at(x, y) / vignetting_at(*centre_ray);
     }
+    // With the centre sample kept, the first new sample traces the cornea's
+    // reflection for all the new ones, and the others none: the
+    // reflection (a few percent of the pixel) needs fewer rays than the
+    // texture and outlines seen through it, which refined the pixel.
+    const auto reflection_weight = [&](int s) {
+      if (!centre || options.mode != RenderMode::fast) return 1.0;
+      return s == 1 ? static_cast<double>(samples - 1) : 0.0;
+    };
     const auto add_sample = [&](const Ray& ray, const Hit& hit, const Pixel& image_position, int s) {
       PrimaryRecord record;
-      integrator->sample(ray, hit, image_position, pixel * edge_spp + s, sum, record);
+      integrator->sample(ray, hit, image_position, pixel * edge_spp + s, sum, record, reflection_weight(s));
       const int c = static_cast<int>(record.pixel_class);
       if (counts[c]++ == 0) first_of_class[c] = record;
       cornea_hits += record.through_cornea ? 1 : 0;

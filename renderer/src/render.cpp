@@ -695,9 +695,64 @@ void apply_visibility(const Scene& scene, int camera, const RayTracer& tracer, S
   }
 }
 
+// Image memory to reuse: fresh memory costs a page fault per 4 KB when
+// first written, a tenth of a remote render. A render takes its planes
+// from the previous result's and from what this thread's earlier renders
+// left (their scratch planes), and leaves its own scratch planes for the
+// next; never more than kKeptScratchBytes per thread.
+class PlanePool {
+ public:
+  PlanePool(int width, int height) : width_(width), height_(height) {
+    for (std::vector<float>& v : kept()) spare_.push_back(std::move(v));
+    kept().clear();
+  }
+  ~PlanePool() {
+    std::size_t bytes = 0;
+    for (std::vector<float>& v : spare_) {
+      bytes += v.capacity() * sizeof(float);
+      if (bytes > kKeptScratchBytes) break;
+      kept().push_back(std::move(v));
+    }
+  }
+  PlanePool(const PlanePool&) = delete;
+  PlanePool& operator=(const PlanePool&) = delete;
+
+  // A plane of zeros of the image's size.
+  ImagePlane take() {
+    ImagePlane plane;
+    plane.width = width_;
+    plane.height = height_;
+    if (!spare_.empty()) {
+      plane.values = std::move(spare_.back());
+      spare_.pop_back();
+    }
+    plane.values.assign(static_cast<std::size_t>(width_) * height_, 0.0f);
+    return plane;
+  }
+  void give(ImagePlane& plane) {
+    if (plane.values.capacity() > 0) spare_.push_back(std::move(plane.values));
+    plane = {};
+  }
+
+ private:
+  static constexpr std::size_t kKeptScratchBytes = std::size_t{64} << 20;
+  static std::vector<std::vector<float>>& kept() {
+    thread_local std::vector<std::vector<float>> planes;
+    return planes;
+  }
+  int width_, height_;
+  std::vector<std::vector<float>> spare_;
+};
+
 }  // namespace
 
 RenderResult render(const Scene& scene, int camera_index, const RenderOptions& options) {
+  RenderResult result;
+  render(scene, camera_index, options, result);
+  return result;
+}
+
+void render(const Scene& scene, int camera_index, const RenderOptions& options, RenderResult& result) {
   validate(scene, camera_index, options);
   const Camera& camera = scene.cameras[camera_index];
   const Intrinsics& k = camera.intrinsics();
@@ -705,7 +760,12 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
 
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
 
-  RenderResult result;
+  PlanePool pool(width, height);
+  pool.give(result.radiance);
+  pool.give(result.electrons);
+  for (NamedPlane& aov : result.aovs) pool.give(aov.plane);
+  result.aovs.clear();
+  result.glints.clear();
   result.camera = camera_index;
   result.truth = compute_truth(scene);
   const RayTracer tracer(scene);
@@ -729,14 +789,14 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
     }
   });
 
-  result.radiance = ImagePlane(width, height);
-  ImagePlane diffuse_electrons(width, height);
-  ImagePlane depth(width, height), nx(width, height), ny(width, height), nz(width, height);
-  ImagePlane id(width, height);
+  result.radiance = pool.take();
+  ImagePlane diffuse_electrons = pool.take();
+  ImagePlane depth = pool.take(), nx = pool.take(), ny = pool.take(), nz = pool.take();
+  ImagePlane id = pool.take();
   constexpr int kClasses = 5;
   std::array<ImagePlane, kClasses> coverage;
-  for (ImagePlane& c : coverage) c = ImagePlane(width, height);
-  ImagePlane cornea(width, height);
+  for (ImagePlane& c : coverage) c = pool.take();
+  ImagePlane cornea = pool.take();
 
   const Point3 center = camera.center();
   const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
@@ -896,15 +956,19 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
     if (z > camera.focal_length_mm() && z < nearest) nearest = z;
   }
   if (std::isfinite(nearest)) psf = point_spread(camera, nearest);
-  arena.execute([&] { result.electrons = blur(diffuse_electrons, psf); });
+  ImagePlane scratch = pool.take();
+  result.electrons = pool.take();
+  arena.execute([&] { blur(diffuse_electrons, psf, result.electrons, scratch); });
+  pool.give(scratch);
+  pool.give(diffuse_electrons);
 
   // Glints: explicit, from the solver, imaged through the same optics.
   // Per-light planes only when their masks are asked for: a full image per
   // LED is memory and summing that most renders do not need.
   const std::size_t n_lights = scene.illuminators.size();
-  ImagePlane glint_total(width, height);
-  std::vector<ImagePlane> glint_planes(options.per_light_glint_masks ? n_lights : 0,
-                                       ImagePlane(width, height));
+  ImagePlane glint_total = pool.take();
+  std::vector<ImagePlane> glint_planes;
+  for (std::size_t l = 0; l < (options.per_light_glint_masks ? n_lights : 0); ++l) glint_planes.push_back(pool.take());
   for (EyeInCameraTruth& view : result.truth.views) {
     if (view.camera != camera_index) continue;
     for (GlintTruth& g : view.glints) {
@@ -940,15 +1004,16 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   if (!options.noise) sensor.noise = false;
   arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
 
-  // AOVs. A glint mask is the fraction of a pixel's signal that the glint carries.
-  const auto fraction_of_signal = [&](const ImagePlane& part) {
-    ImagePlane f(width, height);
-    for (std::size_t i = 0; i < f.values.size(); ++i) {
+  // AOVs. A glint mask is the fraction of a pixel's signal that the glint
+  // carries (computed in the glint's own plane).
+  const auto fraction_of_signal = [&](ImagePlane& part) {
+    for (std::size_t i = 0; i < part.values.size(); ++i) {
       const float total = result.electrons.values[i];
-      f.values[i] = total > 0 ? std::clamp(part.values[i] / total, 0.0f, 1.0f) : 0.0f;
+      part.values[i] = total > 0 ? std::clamp(part.values[i] / total, 0.0f, 1.0f) : 0.0f;
     }
-    return f;
+    return std::move(part);
   };
+  pool.give(coverage[0]);  // the background's: only adaptive sampling needed it
   result.aovs.push_back({"depth", std::move(depth)});
   result.aovs.push_back({"N.x", std::move(nx)});
   result.aovs.push_back({"N.y", std::move(ny)});
@@ -965,7 +1030,6 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
       result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l])});
     }
   }
-  return result;
 }
 
 }  // namespace purkinje::renderer

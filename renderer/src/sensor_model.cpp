@@ -395,14 +395,22 @@ void for_rows(int height, const Body& body) {
   });
 }
 
-ImagePlane gaussian_blur(const ImagePlane& in, double sigma) {
+// A w x h plane of zeros in `plane`, reusing its memory.
+void reset(ImagePlane& plane, int w, int h) {
+  plane.width = w;
+  plane.height = h;
+  plane.values.assign(static_cast<std::size_t>(w) * h, 0.0f);
+}
+
+// Into `out`, through `vertical` (both resized, their memory reused).
+void gaussian_blur(const ImagePlane& in, double sigma, ImagePlane& vertical, ImagePlane& out) {
   const int radius = gaussian_radius(sigma);
   const std::vector<double> taps64 = discrete_gaussian(sigma, radius);
   std::vector<float> taps(2 * radius + 1);
   for (int k = -radius; k <= radius; ++k) taps[k + radius] = static_cast<float>(taps64[std::abs(k)]);
   const int w = in.width, h = in.height;
 
-  ImagePlane vertical(w, h);
+  reset(vertical, w, h);
   for_rows(h, [&](int y) {
     float* out = &vertical.values[static_cast<std::size_t>(y) * w];
     for (int k = -radius; k <= radius; ++k) {
@@ -412,7 +420,7 @@ ImagePlane gaussian_blur(const ImagePlane& in, double sigma) {
     }
   });
 
-  ImagePlane out(w, h);
+  reset(out, w, h);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     std::vector<float> padded(static_cast<std::size_t>(w) + 2 * radius);
     for (int y = rows.begin(); y != rows.end(); ++y) {
@@ -428,10 +436,10 @@ ImagePlane gaussian_blur(const ImagePlane& in, double sigma) {
       }
     }
   });
-  return out;
 }
 
-ImagePlane disc_blur(const ImagePlane& in, double blur_radius) {
+// Into `out` (resized, its memory reused).
+void disc_blur(const ImagePlane& in, double blur_radius, ImagePlane& out) {
   const DiscKernel kernel = defocus_kernel(blur_radius);
   const int r = kernel.radius, w = in.width, h = in.height;
   // Edge-clamped copy, so the inner loops need no bounds checks.
@@ -444,7 +452,7 @@ ImagePlane disc_blur(const ImagePlane& in, double blur_radius) {
     std::copy(src, src + w, row + r);
     std::fill(row + r + w, row + pw, src[w - 1]);
   }
-  ImagePlane out(w, h);
+  reset(out, w, h);
   for_rows(h, [&](int y) {
     float* dst = &out.values[static_cast<std::size_t>(y) * w];
     for (int dy = -r; dy <= r; ++dy) {
@@ -457,7 +465,6 @@ ImagePlane disc_blur(const ImagePlane& in, double blur_radius) {
       }
     }
   });
-  return out;
 }
 
 // ---------------------------------------------------------------------------
@@ -613,13 +620,33 @@ PointSpread point_spread(const Camera& camera, double depth_mm) {
 }
 
 ImagePlane blur(const ImagePlane& plane, const PointSpread& psf) {
+  ImagePlane out, scratch;
+  blur(plane, psf, out, scratch);
+  return out;
+}
+
+void blur(const ImagePlane& plane, const PointSpread& psf, ImagePlane& out, ImagePlane& scratch) {
   require_plane("blur", plane);
   require_non_negative("psf.sigma_px", psf.sigma_px);
   require_non_negative("psf.defocus_radius_px", psf.defocus_radius_px);
-  if (plane.values.empty()) return plane;
-  ImagePlane out = psf.sigma_px > 0 ? gaussian_blur(plane, psf.sigma_px) : plane;
-  if (psf.defocus_radius_px > 0) out = disc_blur(out, psf.defocus_radius_px);
-  return out;
+  if (&out == &plane || &scratch == &plane || &out == &scratch) {
+    throw std::invalid_argument("blur: the input, the output and the scratch plane must be three planes");
+  }
+  if (plane.values.empty() || (!(psf.sigma_px > 0) && !(psf.defocus_radius_px > 0))) {
+    out.width = plane.width;
+    out.height = plane.height;
+    out.values.assign(plane.values.begin(), plane.values.end());
+    return;
+  }
+  if (psf.sigma_px > 0) {
+    gaussian_blur(plane, psf.sigma_px, scratch, out);
+    if (psf.defocus_radius_px > 0) {
+      std::swap(out, scratch);  // the Gaussian's result is now the disc's input
+      disc_blur(scratch, psf.defocus_radius_px, out);
+    }
+  } else {
+    disc_blur(plane, psf.defocus_radius_px, out);
+  }
 }
 
 void add_point_image(ImagePlane& electrons, double u, double v, double total_electrons,

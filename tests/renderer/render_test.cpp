@@ -748,6 +748,33 @@ TEST(RenderLights, LightsOfTwoWavelengthsAddUpOnTheIris) {
   EXPECT_GT(checked, 500);
 }
 
+// Rendering into a result that holds another image (another scene and
+// size, a whole image before a region) reuses its memory and must give
+// exactly what a fresh result gets: no old pixel may show through.
+TEST(RenderReuse, IntoAnOldResultGivesWhatAFreshResultGets) {
+  RenderOptions options;
+  options.noise = false;
+  RenderResult reused = render(bundled("remote"), 0, options);
+  const Scene headset = bundled("headset");
+  options.region = PixelRegion{150, 130, 250, 230};
+  options.per_light_glint_masks = true;
+  for (int round = 0; round < 2; ++round) {  // the second round reuses a region's own result
+    render(headset, 0, options, reused);
+    const RenderResult fresh = render(headset, 0, options);
+    EXPECT_EQ(reused.radiance.width, 400);
+    EXPECT_EQ(reused.radiance.values, fresh.radiance.values);
+    EXPECT_EQ(reused.electrons.values, fresh.electrons.values);
+    EXPECT_EQ(reused.sensor.values, fresh.sensor.values);
+    ASSERT_EQ(reused.aovs.size(), fresh.aovs.size());
+    for (std::size_t i = 0; i < fresh.aovs.size(); ++i) {
+      EXPECT_EQ(reused.aovs[i].name, fresh.aovs[i].name);
+      EXPECT_EQ(reused.aovs[i].plane.values, fresh.aovs[i].plane.values) << fresh.aovs[i].name;
+    }
+    EXPECT_EQ(reused.glints.size(), fresh.glints.size());
+    EXPECT_EQ(reused.truth.views.size(), fresh.truth.views.size());
+  }
+}
+
 TEST(RenderOptionsCheck, BadOptionsThrowNamingTheValue) {
   const Scene scene = bundled("headset");
   RenderOptions options;

@@ -172,6 +172,26 @@ TEST(Blur, WithoutSpreadReturnsTheInputUnchanged) {
   EXPECT_EQ(out.values, p.values);
 }
 
+// Into planes that held another image (another size, other values): what
+// they held must not show.
+TEST(Blur, IntoReusedPlanesGivesWhatFreshPlanesGive) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> value(0, 100);
+  ImagePlane p(37, 23);
+  for (float& v : p.values) v = value(rng);
+  for (const PointSpread psf : {PointSpread{0, 0}, PointSpread{0.8, 0}, PointSpread{0, 2.5}, PointSpread{0.7, 3.3}}) {
+    ImagePlane out(50, 61, 9.0f), scratch(3, 2, -4.0f);
+    blur(p, psf, out, scratch);
+    const ImagePlane fresh = blur(p, psf);
+    EXPECT_EQ(out.width, 37);
+    EXPECT_EQ(out.height, 23);
+    EXPECT_EQ(out.values, fresh.values) << psf.sigma_px << " " << psf.defocus_radius_px;
+  }
+  ImagePlane out;
+  EXPECT_THROW(blur(p, {0.5, 0}, out, out), std::invalid_argument);
+  EXPECT_THROW(blur(p, {0.5, 0}, p, out), std::invalid_argument);
+}
+
 TEST(Blur, FlatImageStaysFlatUpToTheBorders) {
   for (const PointSpread psf : {PointSpread{0.5, 0}, PointSpread{2.2, 0}, PointSpread{0.7, 3.3}}) {
     const ImagePlane out = blur(ImagePlane(40, 30, 7.25f), psf);

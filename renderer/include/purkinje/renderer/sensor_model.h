@@ -45,6 +45,10 @@ PointSpread point_spread(const Camera& camera, double depth_mm);
 // so the pixel footprint is not counted twice. sigma 0 and r 0 return the
 // input unchanged.
 ImagePlane blur(const ImagePlane& plane, const PointSpread& psf);
+// The same into `out`, with `scratch` for the intermediate pass: both are
+// resized and their memory reused (for callers rendering many images).
+// Throws std::invalid_argument unless the three planes are distinct.
+void blur(const ImagePlane& plane, const PointSpread& psf, ImagePlane& out, ImagePlane& scratch);
 
 // Adds the image of a point source carrying `total_electrons`, centred at
 // pixel (u, v) (OpenCV convention: pixel centres at integers), spread by

@@ -72,6 +72,9 @@ constexpr int kDiffuseMissRays = 16;
 // images are those of tracing every shadow ray), but a shadow narrower
 // than 8 px inside a cell whose four corners are lit would be.
 constexpr GridSpacing kVisibilitySpacing{8, 2};
+// Iris grids (iris_grid_sizes): node spacings in the image.
+constexpr double kIrisNodeSpacingPx = 2.0;
+constexpr double kIrisIndirectSpacingPx = 6.0;
 // A gathered ray's branches at the cornea are followed while they carry
 // this much of the ray's weight: what they gather is itself a few percent
 // of the image.
@@ -194,6 +197,28 @@ std::array<double, 2> subpixel_offset_r2(int sample, double shift_u, double shif
   return {u - std::floor(u), v - std::floor(v)};
 }
 
+// Nodes per side of an eye's iris grids: the lights' caches (the option,
+// or from the iris's size in the image: a node every 2 px, odd, 9 to
+// 33) and the indirect light's (a node every 6 px, 7 to 13). Finer than
+// the pixels resolve gains nothing; a remote camera's iris is 49 px wide.
+struct IrisGridSizes {
+  int direct = 33, indirect = 13;
+};
+IrisGridSizes iris_grid_sizes(const Camera& camera, const Eye& eye, const RenderOptions& options) {
+  IrisGridSizes sizes;
+  const double z = (camera.camera_from_world() * eye.cornea_center()).z;
+  if (z > 0) {
+    const double diameter_px = 2 * eye.model().iris_radius_mm * camera.intrinsics().fx / z;
+    const auto odd = [&](double spacing_px, int lo, int hi) {
+      return std::clamp(2 * static_cast<int>(std::lround(diameter_px / (2 * spacing_px))) + 1, lo, hi);
+    };
+    sizes.direct = odd(kIrisNodeSpacingPx, 9, 33);
+    sizes.indirect = odd(kIrisIndirectSpacingPx, 7, 13);
+  }
+  if (options.iris_cache_resolution > 0) sizes.direct = options.iris_cache_resolution;
+  return sizes;
+}
+
 // Fast mode: Fresnel-weighted splitting at the cornea, direct light from
 // point lights with shadow rays, iris light from the exact caches.
 class FastIntegrator final : public PathIntegrator {
@@ -212,12 +237,12 @@ class FastIntegrator final : public PathIntegrator {
     }
     iris_.resize(scene.eyes.size());
     for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+      const IrisGridSizes sizes = iris_grid_sizes(camera, scene.eyes[e], options);
       for (const Light& l : lights_) {
-        iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr,
-                              options.iris_cache_resolution, visible);
+        iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr, sizes.direct, visible);
       }
-      build_iris_indirect(static_cast<int>(e));
-      build_iris_light(static_cast<int>(e), options.iris_cache_resolution);
+      build_iris_indirect(static_cast<int>(e), sizes.indirect);
+      build_iris_light(static_cast<int>(e), sizes.direct);
     }
     diffuse_ = std::make_unique<DiffuseCache>(
         camera, traced, kDiffuseCacheSpacing,
@@ -473,14 +498,13 @@ class FastIntegrator final : public PathIntegrator {
   // iris: so computed at the nodes of a coarse grid (channels: lights) by
   // gathering over the hemisphere (kIndirectRays low-discrepancy
   // directions, cosine-distributed).
-  static constexpr int kIndirectSide = 13;
   static constexpr int kIndirectRays = 32;
 
-  void build_iris_indirect(int eye_index) {
+  void build_iris_indirect(int eye_index, int side) {
     const Eye& eye = scene_.eyes[eye_index];
     const EyeModel& m = eye.model();
     IrisGrid& cache = iris_indirect_[eye_index];
-    cache.resize(m.iris_radius_mm, kIndirectSide, lights_.size());
+    cache.resize(m.iris_radius_mm, side, lights_.size());
     const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
     // Nodes outside the iris gather as if at its rim, so that lookups near
     // the rim interpolate between iris values.
@@ -611,10 +635,11 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
                                 std::to_string(options.edge_samples_per_pixel) +
                                 ": must be in [0, 1048576] (0: no adaptive sampling)");
   }
-  if (options.iris_cache_resolution < 2 || options.iris_cache_resolution > 513) {
+  if (options.iris_cache_resolution != 0 &&
+      (options.iris_cache_resolution < 2 || options.iris_cache_resolution > 513)) {
     throw std::invalid_argument("render: iris_cache_resolution = " +
                                 std::to_string(options.iris_cache_resolution) +
-                                ": must be in [2, 513]");
+                                ": must be 0 (from the iris's size in the image) or in [2, 513]");
   }
   if (options.region) {
     const PixelRegion& r = *options.region;

@@ -51,7 +51,9 @@ struct RenderOptions {
   int edge_samples_per_pixel = 16;
   std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
   bool noise = true;              // false: no shot or read noise whatever the sensor says
-  int iris_cache_resolution = 33; // nodes per side of each iris irradiance cache (fast mode)
+  // Nodes per side of each iris irradiance cache (fast mode). 0: from the
+  // iris's size in the image, a node every 2 px or so (odd, 9 to 33).
+  int iris_cache_resolution = 0;
   // Reference mode: photons traced from each light into each eye, binned on
   // the iris plane; the binning's noise falls as 1/sqrt of this.
   std::int64_t reference_photons_per_light = std::int64_t{1} << 22;

@@ -787,6 +787,18 @@ TEST(RenderOptionsCheck, BadOptionsThrowNamingTheValue) {
   EXPECT_THROW(render(scene, 3, options), std::invalid_argument);
   options.region = PixelRegion{10, 10, 10, 20};
   EXPECT_THROW(render(scene, 0, options), std::invalid_argument);
+  // Iris caches: 0 (sized to the iris's image, the default) or 2 to 513 nodes.
+  for (const int bad : {1, -3, 514}) {
+    options = {};
+    options.iris_cache_resolution = bad;
+    try {
+      render(scene, 0, options);
+      ADD_FAILURE() << "iris_cache_resolution = " << bad << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("iris_cache_resolution = " + std::to_string(bad)), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace

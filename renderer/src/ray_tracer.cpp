@@ -87,6 +87,7 @@
 #include <cstddef>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -918,8 +919,12 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
   constexpr std::size_t kPacket = 16, kMinPacket = 4;
   for (std::size_t first = 0; first < rays.size(); first += kPacket) {
     const std::size_t count = std::min(kPacket, rays.size() - first);
-    Lane lanes[kPacket];
-    for (std::size_t i = 0; i < count; ++i) lanes[i] = lane_of(rays[first + i]);
+    // Only the lanes in use are constructed: a packet of 7 (a refined
+    // pixel's rays) need not initialise 16.
+    static_assert(std::is_trivially_destructible_v<Lane>);
+    alignas(Lane) unsigned char storage[kPacket * sizeof(Lane)];
+    Lane* lanes = reinterpret_cast<Lane*>(storage);
+    for (std::size_t i = 0; i < count; ++i) new (&lanes[i]) Lane(lane_of(rays[first + i]));
     if (count < kMinPacket) {
       // A packet this thin costs more than its rays one by one.
       for (std::size_t i = 0; i < count; ++i) {

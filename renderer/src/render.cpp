@@ -84,6 +84,8 @@ constexpr double kGatherMinBranch = 1e-2;
 // radiance bends by more than this fraction of its local level gets the
 // edge samples (see find_edges).
 constexpr double kEdgeContrast = 0.02;
+// Of the edge rays, the share for iris pixels refined for texture alone.
+constexpr int kIrisTextureShareNum = 3, kIrisTextureShareDen = 4;
 
 }  // namespace
 
@@ -662,6 +664,9 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
   }
 }
 
+// Why find_edges refines a pixel.
+enum class Refine : std::uint8_t { no = 0, outline = 1, contrast = 2 };
+
 // The pixels of `region` whose first pass undersamples them: where the
 // class changes (an outline), samples disagree on it, or the radiance
 // bends by more than kEdgeContrast of its local level (texture, shadow
@@ -677,17 +682,19 @@ std::vector<std::uint8_t> find_edges(const ImagePlane& radiance, const ImagePlan
   for (int y = region.y0; y < region.y1; ++y) {
     for (int x = region.x0; x < region.x1; ++x) {
       const int c = static_cast<int>(id.at(x, y));
-      bool edge = coverage[c].at(x, y) < 1.0f;
-      for (int dy = -1; dy <= 1 && !edge; ++dy) {
-        for (int dx = -1; dx <= 1 && !edge; ++dx) {
+      Refine refine = coverage[c].at(x, y) < 1.0f ? Refine::outline : Refine::no;
+      for (int dy = -1; dy <= 1 && refine != Refine::outline; ++dy) {
+        for (int dx = -1; dx <= 1 && refine != Refine::outline; ++dx) {
           if (!inside(x + dx, y + dy)) continue;
-          if (id.at(x + dx, y + dy) != id.at(x, y)) edge = true;
+          if (id.at(x + dx, y + dy) != id.at(x, y)) refine = Refine::outline;
           if (!inside(x - dx, y - dy)) continue;
           const double a = radiance.at(x + dx, y + dy), b = radiance.at(x, y), d = radiance.at(x - dx, y - dy);
-          if (std::abs(a - 2 * b + d) > kEdgeContrast * (a + b + d) / 3) edge = true;
+          if (refine == Refine::no && std::abs(a - 2 * b + d) > kEdgeContrast * (a + b + d) / 3) {
+            refine = Refine::contrast;
+          }
         }
       }
-      edges[static_cast<std::size_t>(y) * radiance.width + x] = edge;
+      edges[static_cast<std::size_t>(y) * radiance.width + x] = static_cast<std::uint8_t>(refine);
     }
   }
   return edges;
@@ -954,10 +961,18 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   });
   if (edge_spp > spp) {
     const std::vector<std::uint8_t> edges = find_edges(result.radiance, id, coverage, region, traced);
+    // Iris pixels refined for their texture alone get fewer rays than
+    // outlines: their error against the reference is the iris caches'
+    // interpolation more than their sampling (headset: 2.3% of the iris's
+    // mean per pixel at 8 rays, 2.2% at 16, 2.1% at 32).
+    const int iris_texture_spp = std::max(spp + 1, (edge_spp * kIrisTextureShareNum) / kIrisTextureShareDen);
     each_row(region.y0, region.y1, first_pass_span, 1.0 - first_pass_span, [&](int y) {
       for (int x = region.x0; x < region.x1; ++x) {
         // After a lone centre sample, the refined pixel keeps it.
-        if (edges[static_cast<std::size_t>(y) * width + x]) render_pixel(x, y, edge_spp, spp == 1, nullptr);
+        const auto refine = static_cast<Refine>(edges[static_cast<std::size_t>(y) * width + x]);
+        if (refine == Refine::no) continue;
+        const bool iris_texture = refine == Refine::contrast && id.at(x, y) == static_cast<float>(PixelClass::iris);
+        render_pixel(x, y, iris_texture ? iris_texture_spp : edge_spp, spp == 1, nullptr);
       }
     });
     // The margin: outside the region, so left at 0 as promised.

@@ -82,6 +82,14 @@ TEST(VisibilityCache, KnowsNothingWhereTheNodesSeeAnotherSurface) {
   EXPECT_EQ(cache.at(far_from_seam, find(far_from_seam)).known, 1u);
 }
 
+// Every light lights the plane but for a stripe of shadow between image
+// columns u0 and u1.
+VisibilityCache::Lit shadow_stripe(const Camera& camera, double u0, double u1) {
+  const auto x_at = [&](double u) { return (u - camera.intrinsics().cx) / camera.intrinsics().fx * kPlaneZ; };
+  const double x0 = x_at(u0), x1 = x_at(u1);
+  return [x0, x1](const DiffusePoint& p, std::size_t) { return p.point.x < x0 || p.point.x > x1; };
+}
+
 // The known limit (docs/rendering.md): a shadow narrower than the node
 // spacing that falls between the nodes is not seen.
 TEST(VisibilityCache, AShadowBetweenNodesNarrowerThanTheSpacingIsMissed) {
@@ -89,10 +97,7 @@ TEST(VisibilityCache, AShadowBetweenNodesNarrowerThanTheSpacingIsMissed) {
   const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
   // A stripe of shadow 1 px wide centred on u = 41, between the nodes at
   // u = 40 and u = 42.
-  const auto x_at = [&](double u) { return (u - camera.intrinsics().cx) / camera.intrinsics().fx * kPlaneZ; };
-  const double x0 = x_at(40.5), x1 = x_at(41.5);
-  const auto lit = [&](const DiffusePoint& p, std::size_t) { return p.point.x < x0 || p.point.x > x1; };
-  const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, lit);
+  const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, shadow_stripe(camera, 40.5, 41.5));
   const Pixel in_stripe{41.0, 12.0};
   const auto agreed = cache.at(in_stripe, find(in_stripe));
   EXPECT_EQ(agreed.known, 1u);
@@ -132,9 +137,7 @@ TEST(VisibilityCache, WithTwoLevelsAShadowInsideALitCoarseCellIsMissed) {
   const auto find = [&](const Pixel& p) { return plane_point(camera, p); };
   // A stripe of shadow 3 px wide centred on u = 44, between the coarse
   // nodes at u = 40 and u = 48.
-  const auto x_at = [&](double u) { return (u - camera.intrinsics().cx) / camera.intrinsics().fx * kPlaneZ; };
-  const double x0 = x_at(42.5), x1 = x_at(45.5);
-  const auto lit = [&](const DiffusePoint& p, std::size_t) { return p.point.x < x0 || p.point.x > x1; };
+  const auto lit = shadow_stripe(camera, 42.5, 45.5);
   const Pixel in_stripe{44.0, 12.0};
   const VisibilityCache fine(camera, kWhole, kTwoPx, 1, find, lit);
   const auto seen = fine.at(in_stripe, find(in_stripe));
@@ -182,6 +185,25 @@ TEST(DiffuseCache, InterpolatesAConstantExactlyAndRefusesAnotherSurface) {
   EXPECT_FALSE(cache.irradiance(left, sliver, e));
 }
 
+// Every quarter pixel of `region`, looked up in the whole image's cache
+// and in the region's: both must serve it, with the same value, which
+// `also(u, value)` may check further. `checked` counts the lookups.
+template <typename Also>
+void expect_same_lookups(const DiffuseCache& whole, const DiffuseCache& part, const PixelRegion& region,
+                         const FindDiffusePoint& find, int& checked, const Also& also) {
+  for (double v = region.y0 - 0.5; v <= region.y1 - 0.5; v += 0.25) {
+    for (double u = region.x0 - 0.5; u <= region.x1 - 0.5; u += 0.25) {
+      double a = -1, b = -2;
+      const Pixel p{u, v};
+      ASSERT_TRUE(whole.irradiance(p, find(p), &a)) << "at (" << u << ", " << v << ")";
+      ASSERT_TRUE(part.irradiance(p, find(p), &b)) << "at (" << u << ", " << v << ")";
+      ASSERT_EQ(a, b) << "at (" << u << ", " << v << ")";
+      also(u, a);
+      ++checked;
+    }
+  }
+}
+
 // The lattice is anchored at pixel (0, 0) and covers every sample of the
 // region's pixels, so a region's lookups are the whole image's.
 TEST(DiffuseCache, ARegionLooksUpExactlyWhatTheWholeImageDoes) {
@@ -195,16 +217,7 @@ TEST(DiffuseCache, ARegionLooksUpExactlyWhatTheWholeImageDoes) {
   const DiffuseCache whole(camera, kWhole, kEightPx, 1, find, gather, direct_level, 0.0);
   const DiffuseCache part(camera, region, kEightPx, 1, find, gather, direct_level, 0.0);
   int checked = 0;
-  for (double v = region.y0 - 0.5; v <= region.y1 - 0.5; v += 0.25) {
-    for (double u = region.x0 - 0.5; u <= region.x1 - 0.5; u += 0.25) {
-      double a = -1, b = -2;
-      const Pixel p{u, v};
-      ASSERT_TRUE(whole.irradiance(p, find(p), &a));
-      ASSERT_TRUE(part.irradiance(p, find(p), &b));
-      ASSERT_EQ(a, b) << "at (" << u << ", " << v << ")";
-      ++checked;
-    }
-  }
+  expect_same_lookups(whole, part, region, find, checked, [](double, double) {});
   EXPECT_GT(checked, 3000);
 }
 
@@ -249,17 +262,9 @@ TEST(DiffuseCache, WithTwoLevelsARegionLooksUpExactlyWhatTheWholeImageDoes) {
   const PixelRegion region{9, 9, 47, 25};
   const DiffuseCache part(camera, region, GridSpacing{16, 4}, 1, find, gather, direct_level, 1e-3);
   int checked = 0;
-  for (double v = region.y0 - 0.5; v <= region.y1 - 0.5; v += 0.25) {
-    for (double u = region.x0 - 0.5; u <= region.x1 - 0.5; u += 0.25) {
-      double a = -1, b = -2;
-      const Pixel p{u, v};
-      ASSERT_TRUE(whole.irradiance(p, find(p), &a));
-      ASSERT_TRUE(part.irradiance(p, find(p), &b));
-      ASSERT_EQ(a, b) << "at (" << u << ", " << v << ")";
-      if (u < 15) ASSERT_DOUBLE_EQ(a, 5.0);
-      ++checked;
-    }
-  }
+  expect_same_lookups(whole, part, region, find, checked, [](double u, double e) {
+    if (u < 15) EXPECT_DOUBLE_EQ(e, 5.0) << "at u = " << u;
+  });
   EXPECT_GT(checked, 9000);
 }
 

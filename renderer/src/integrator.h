@@ -69,7 +69,7 @@ class PathIntegrator {
  public:
   virtual ~PathIntegrator() = default;
   virtual void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
-                      Contribution& out, PrimaryRecord& record, double reflection_weight = 1) const = 0;
+                      Contribution& out, PrimaryRecord& record, double reflection_weight) const = 0;
 };
 
 // A ray meeting a corneal interface: which side it comes from, the Fresnel

@@ -103,7 +103,9 @@ RenderResult render(const Scene& scene, int camera, const RenderOptions& options
 // loop over many images renders without allocating each one anew (fresh
 // memory costs a page fault per 4 KB, a tenth of a remote render). Either
 // form also keeps its scratch images for the thread's next render (at most
-// 64 MB per thread); the images do not depend on any of this.
+// 64 MB per thread); the images do not depend on any of this. Bad options
+// throw before `result` is touched; a later failure leaves it valid but
+// unspecified.
 void render(const Scene& scene, int camera, const RenderOptions& options, RenderResult& result);
 
 // The files of one rendered image: the sensor image (PNG), float radiance

@@ -680,13 +680,24 @@ struct RayTracer::Impl {
                                                     : error_message));
   }
 
+  // The lane clipped to the scene's bounds: where its float ray starts
+  // (recorded as the lane's t_shift) and Embree's rounded-up tfar; false
+  // when the lane misses the bounds.
+  bool start_float_ray(Lane& lane, Point3& start, float& tfar) const {
+    double t0 = lane.t_lo, t1 = lane.t_hi;
+    if (empty || !clip_to_box(bounds, lane.origin, lane.direction, t0, t1)) return false;
+    lane.t_shift = t0;
+    start = lane.origin + lane.direction * t0;
+    tfar = embree_far(t1 - t0);
+    return true;
+  }
+
   // Runs the query on `lane`, whose `surface` is left null when nothing is hit.
   template <bool kOcclusion>
   void run(Lane& lane, bool skip_cornea) const {
-    double t0 = lane.t_lo, t1 = lane.t_hi;
-    if (empty || !clip_to_box(bounds, lane.origin, lane.direction, t0, t1)) return;
-    lane.t_shift = t0;
-    const Point3 start = lane.origin + lane.direction * t0;
+    Point3 start;
+    float tfar = 0;
+    if (!start_float_ray(lane, start, tfar)) return;
 
     Query query;
     rtcInitIntersectContext(&query.embree);
@@ -703,7 +714,7 @@ struct RayTracer::Impl {
     ray.dir_y = static_cast<float>(lane.direction.y);
     ray.dir_z = static_cast<float>(lane.direction.z);
     ray.time = 0.0f;
-    ray.tfar = embree_far(t1 - t0);
+    ray.tfar = tfar;
     ray.mask = skip_cornea && masks ? kOtherMask : ~0u;
     ray.id = 0;  // the lane
     ray.flags = 0;
@@ -724,10 +735,9 @@ struct RayTracer::Impl {
     bool any = false;
     for (std::size_t i = 0; i < count; ++i) {
       Lane& lane = lanes[i];
-      double t0 = lane.t_lo, t1 = lane.t_hi;
-      if (empty || !(t0 < t1) || !clip_to_box(bounds, lane.origin, lane.direction, t0, t1)) continue;
-      lane.t_shift = t0;
-      const Point3 start = lane.origin + lane.direction * t0;
+      Point3 start;
+      float tfar = 0;
+      if (!(lane.t_lo < lane.t_hi) || !start_float_ray(lane, start, tfar)) continue;
       rayhit.ray.org_x[i] = static_cast<float>(start.x);
       rayhit.ray.org_y[i] = static_cast<float>(start.y);
       rayhit.ray.org_z[i] = static_cast<float>(start.z);
@@ -736,7 +746,7 @@ struct RayTracer::Impl {
       rayhit.ray.dir_y[i] = static_cast<float>(lane.direction.y);
       rayhit.ray.dir_z[i] = static_cast<float>(lane.direction.z);
       rayhit.ray.time[i] = 0.0f;
-      rayhit.ray.tfar[i] = embree_far(t1 - t0);
+      rayhit.ray.tfar[i] = tfar;
       rayhit.ray.mask[i] = ~0u;
       rayhit.ray.id[i] = static_cast<unsigned>(i);  // the lane
       rayhit.ray.flags[i] = 0;

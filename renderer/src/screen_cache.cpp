@@ -21,6 +21,9 @@ constexpr double kMinNormalCos = 0.9;
 constexpr double kReachSpacings = 2.5;
 constexpr double kMinCosView = 0.25;
 
+// a / b rounded down (toward minus infinity), b > 0.
+int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
 template <typename Body>
 void for_each_node(std::size_t count, const Body& body) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -38,7 +41,6 @@ ScreenGrid::ScreenGrid(const Camera& camera, const PixelRegion& region, int spac
   // Samples of pixel x lie in [x - 0.5, x + 0.5]: nodes from the one at
   // or before x0 - 0.5 to the one at or after x1 - 0.5, so that no lookup
   // in the region is clamped and every lookup is the whole image's.
-  const auto floor_div = [](int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
   i0_ = floor_div(region.x0 - 1, spacing_);
   j0_ = floor_div(region.y0 - 1, spacing_);
   nx_ = floor_div(region.x1 + spacing_ - 1, spacing_) - i0_ + 1;
@@ -99,11 +101,6 @@ bool ScreenGrid::serves(std::size_t n, const DiffusePoint& p, double& d2) const 
   return d2 < 1;
 }
 
-int ScreenGrid::corners(const Pixel& image_position, const DiffusePoint& p, Corner out[4]) const {
-  Cell cell;
-  return locate(image_position, cell) ? corners(cell, p, out) : 0;
-}
-
 int ScreenGrid::corners(const Cell& cell, const DiffusePoint& p, Corner out[4]) const {
   int count = 0;
   for (int dj = 0; dj < 2; ++dj) {
@@ -152,7 +149,6 @@ void TwoLevelGrid::refine(const Camera& camera, const PixelRegion& region, const
   const auto unsettled = [&](int ci, int cj) {
     return coarse_.contains(ci, cj) && coarse_.contains(ci + 1, cj + 1) && !settled_[coarse_.node(ci, cj)];
   };
-  const auto floor_div = [](int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
   fine_.emplace(camera, region, fine_px_, find, [&](int i, int j) {
     const int ci = floor_div(i, ratio), cj = floor_div(j, ratio);
     const bool on_i = i % ratio == 0, on_j = j % ratio == 0;

@@ -74,14 +74,13 @@ class ScreenGrid {
   // Cells are numbered by their top-left node.
   std::size_t cell_index(const Cell& cell) const { return node(cell.i, cell.j); }
 
-  // The (up to 4) nodes of the cell around `image_position` that serve `p`:
-  // the same surface, a normal within 26 degrees, within 2.5 node spacings
-  // on the surface. Each with its bilinear weight; returns how many.
+  // The (up to 4) nodes of a cell that serve `p`: the same surface, a
+  // normal within 26 degrees, within 2.5 node spacings on the surface.
+  // Each with its bilinear weight; returns how many.
   struct Corner {
     std::size_t node;
     double weight;
   };
-  int corners(const Pixel& image_position, const DiffusePoint& p, Corner out[4]) const;
   int corners(const Cell& cell, const DiffusePoint& p, Corner out[4]) const;
   // Whether a cell's four nodes see one surface and serve each other (a
   // smooth patch, no outline or crease between them).

@@ -263,7 +263,9 @@ TEST(DiffuseCache, WithTwoLevelsARegionLooksUpExactlyWhatTheWholeImageDoes) {
   const DiffuseCache part(camera, region, GridSpacing{16, 4}, 1, find, gather, direct_level, 1e-3);
   int checked = 0;
   expect_same_lookups(whole, part, region, find, checked, [](double u, double e) {
-    if (u < 15) EXPECT_DOUBLE_EQ(e, 5.0) << "at u = " << u;
+    if (u < 15) {
+      EXPECT_DOUBLE_EQ(e, 5.0) << "at u = " << u;
+    }
   });
   EXPECT_GT(checked, 9000);
 }

@@ -46,15 +46,6 @@ Rotation Rotation::from_rotation_vector(const Vector3& w) {
   return from_axis_angle(UnitVector3::normalize(w), angle);
 }
 
-Vector3 Rotation::operator*(const Vector3& v) const {
-  return {m_[0] * v.x + m_[1] * v.y + m_[2] * v.z, m_[3] * v.x + m_[4] * v.y + m_[5] * v.z,
-          m_[6] * v.x + m_[7] * v.y + m_[8] * v.z};
-}
-
-UnitVector3 Rotation::operator*(const UnitVector3& v) const {
-  return UnitVector3::from_normalized_unchecked((*this) * v.vector());
-}
-
 Rotation Rotation::operator*(const Rotation& o) const {
   Rotation r;
   for (int i = 0; i < 3; ++i)

@@ -313,7 +313,11 @@ constexpr int kFilledRings = 3;
 IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_position,
                                          double radiant_intensity_w_sr, int resolution,
                                          const Visibility& visible)
-    : eye_from_world_(eye.eye_from_world()), resolution_(resolution) {
+    : eye_from_world_(eye.eye_from_world()),
+      world_from_eye_(eye.world_from_eye()),
+      light_world_(light_position),
+      visible_(visible),
+      resolution_(resolution) {
   if (resolution < 2) {
     throw std::invalid_argument("IrisIrradianceCache: resolution = " + std::to_string(resolution) +
                                 ": must be >= 2");
@@ -350,34 +354,21 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
   tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j != rows.end(); ++j) {
       for (int i = 0; i < n; ++i) {
-        samples[index(i, j)] = solve_node(eye, optics, light_position, light_eye,
-                                          radiant_intensity_w_sr, coordinate(i), coordinate(j));
+        Sample& s = samples[index(i, j)];
+        s = solve_node(eye, optics, light_position, light_eye, radiant_intensity_w_sr, coordinate(i), coordinate(j));
+        if (visible && s.irradiance > 0 && s.cap_margin > 0 &&
+            std::hypot(coordinate(i), coordinate(j)) < optics.inside_radius) {
+          s.hidden = !visible(light_position, world_from_eye_ * (Point3::origin() + s.path.ray.anterior));
+        }
       }
     }
   });
-  // Serially: the caller's visibility test need not be thread-safe.
-  if (visible) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        Sample& s = samples[index(i, j)];
-        if (!(s.irradiance > 0) || !(s.cap_margin > 0) ||
-            !(std::hypot(coordinate(i), coordinate(j)) < optics.inside_radius)) {
-          continue;
-        }
-        const Point3 cornea = eye.world_from_eye() * (Point3::origin() + s.path.ray.anterior);
-        if (!visible(light_position, cornea)) {
-          s.hidden = true;
-          s.spread = 0;
-        }
-      }
-    }
-  }
 
   // Values for the nodes just beyond the paths, ring by ring, each ring
   // from the previous state only (so the order, and the thread count, do
   // not matter): the paths' continuation where it exists, else a linear
-  // extrapolation from the known nodes around. Beside hidden nodes only, a node is
-  // hidden too: the light's path to it would pass the same obstacle.
+  // extrapolation from the known nodes around. Beside hidden nodes only, a
+  // node is hidden too: the light's path to it would pass the same obstacle.
   for (int ring = 0; ring < kFilledRings; ++ring) {
     std::vector<int> frontier;
     for (int j = 0; j < n; ++j) {
@@ -411,7 +402,7 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
             const Sample& a = samples[index(i1, j1)];
             if (!a.known()) continue;
             all_hidden = all_hidden && a.hidden;
-            if (!out.has_path && a.has_path && !a.hidden) {
+            if (!out.has_path && a.has_path) {
               Differential d = a.path;
               if (continue_to(optics, light_eye, d, coordinate(i), coordinate(j))) {
                 set_irradiance(optics, d, radiant_intensity_w_sr, out);
@@ -430,12 +421,12 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
             ++lines;
           }
         }
+        out.hidden = all_hidden;
         if (out.has_path) continue;
         const double* sum = lines > 0 ? line : near;
         const double k = 1.0 / (lines > 0 ? lines : nears);
         out.extrapolated = true;
-        out.hidden = all_hidden;
-        out.spread = all_hidden ? 0.0 : sum[0] * k;
+        out.spread = sum[0] * k;
         out.u = sum[1] * k;
         out.v = sum[2] * k;
       }
@@ -447,7 +438,7 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
     for (int i = 0; i < n; ++i) {
       const Sample& s = samples[index(i, j)];
       if (!s.known()) continue;
-      nodes_[index(i, j)] = {s.spread, s.u, s.v, true};
+      nodes_[index(i, j)] = {s.spread, s.u, s.v, true, !s.hidden};
     }
   }
 }
@@ -468,12 +459,15 @@ double IrisIrradianceCache::irradiance_w_m2(const Point3& iris_plane_point) cons
   cubic_weights(gx - i, wx);
   cubic_weights(gy - j, wy);
   double spread = 0, u = 0, v = 0;
+  bool any_lit = false, any_hidden = false;
   for (int b = 0; b < 4; ++b) {
     const std::size_t row = static_cast<std::size_t>(std::clamp(j - 1 + b, 0, resolution_ - 1));
     double spread_row = 0, u_row = 0, v_row = 0;
     for (int a = 0; a < 4; ++a) {
       const GridNode& node = nodes_[row * resolution_ + std::clamp(i - 1 + a, 0, resolution_ - 1)];
       if (!node.known) return 0;  // two cells or more beyond the lit region
+      any_lit = any_lit || node.lit;
+      any_hidden = any_hidden || !node.lit;
       spread_row += wx[a] * node.spread_w_m2;
       u_row += wx[a] * node.chart_u_mm;
       v_row += wx[a] * node.chart_v_mm;
@@ -482,7 +476,7 @@ double IrisIrradianceCache::irradiance_w_m2(const Point3& iris_plane_point) cons
     u += wy[b] * u_row;
     v += wy[b] * v_row;
   }
-  if (!(spread > 0)) return 0;
+  if (!any_lit || !(spread > 0)) return 0;
   // The anterior crossing, exactly where the interpolated chart point says.
   const double r2 = u * u + v * v, R = anterior_radius_mm_, k = anterior_one_plus_q_;
   const double disc = R * R - k * r2;
@@ -490,9 +484,11 @@ double IrisIrradianceCache::irradiance_w_m2(const Point3& iris_plane_point) cons
   const double w = r2 / (R + std::sqrt(disc));  // depth below the apex
   if (!(w < limbus_depth_mm_)) return 0;
   const Vector3 normal{u, v, R - k * w};
-  const Vector3 from_light = Point3{u, v, apex_z_mm_ - w} - light_mm_;
+  const Point3 crossing{u, v, apex_z_mm_ - w};
+  const Vector3 from_light = crossing - light_mm_;
   const double c = -dot(from_light, normal) / (from_light.norm() * normal.norm());
   if (!(c > 0)) return 0;
+  if (any_hidden && !visible_(light_world_, world_from_eye_ * crossing)) return 0;
   return spread * c * (1.0 - fresnel_reflectance(c, 1.0, anterior_inner_index_));
 }
 

@@ -267,15 +267,27 @@ VisibilityCache::Agreement VisibilityCache::at(const Pixel& image_position, cons
   const ScreenGrid* grid = grid_->at(image_position, cell);
   if (!grid) return {};
   ScreenGrid::Corner corners[4];
-  if (grid->corners(cell, p, corners) < 4) return {};
+  const int count = grid->corners(cell, p, corners);
+  if (count < 3) return {};
+  if (count == 3) {
+    // Three nodes settle the points inside their triangle: a (locally
+    // straight) shadow edge cannot part such a point from all three. The
+    // fourth sees another surface: at outlines, where most unsettled
+    // points lie, this halves the shadow rays.
+    int missing = 0;
+    while (missing < 3 && corners[missing].node == grid->node(cell.i + missing % 2, cell.j + missing / 2)) ++missing;
+    const double u = missing % 2 ? cell.tx : 1 - cell.tx, v = missing / 2 ? cell.ty : 1 - cell.ty;
+    if (u + v > 1) return {};
+  }
   const std::vector<std::uint64_t>& nodes = grid == &grid_->coarse() ? coarse_ : fine_;
   std::uint64_t all = ~std::uint64_t{0}, any = 0;
-  for (const ScreenGrid::Corner& c : corners) {
+  for (int i = 0; i < count; ++i) {
+    const ScreenGrid::Corner& c = corners[i];
     all &= nodes[c.node];
     any |= nodes[c.node];
   }
   const std::uint64_t mask = lights_ == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << lights_) - 1;
-  // Agreed: lit at all four (all) or at none (~any).
+  // Agreed: lit at all of them (all) or at none (~any).
   return {(all | ~any) & mask, all & mask};
 }
 

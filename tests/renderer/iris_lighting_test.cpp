@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "purkinje/models/eye.h"
+#include "purkinje/models/specular.h"
 #include "purkinje/renderer/radiometry.h"
 
 namespace purkinje::renderer {
@@ -412,6 +413,42 @@ TEST(IrisIrradianceCache, VisibilityIsAskedForTheLightAndAnteriorCorneaPoints) {
     EXPECT_EQ(cache.irradiance_w_m2(lit), open.irradiance_w_m2(lit)) << x;
     EXPECT_GT(open.irradiance_w_m2(lit), 0.0);
   }
+}
+
+// Between nodes on either side of an eyelid's shadow edge, a lookup is
+// dark exactly where the solver's path crosses the cornea behind the lid,
+// and elsewhere what it is without the lid: the edge is not smeared over
+// the interpolation's nodes.
+TEST(IrisIrradianceCache, AnEyelidsShadowEdgeIsSharpBetweenNodes) {
+  const EyeModel m = keratometric_eye();
+  const Eye eye = posed(m);
+  const Point3 light = light_at(eye, 10 * kDeg, 400);
+  const auto below_lid = [&](const Point3& cornea) { return (eye.eye_from_world() * cornea).y < 1.0; };
+  const IrisIrradianceCache lidded(eye, light, 1.0, 33,
+                                   [&](const Point3&, const Point3& cornea) { return below_lid(cornea); });
+  const IrisIrradianceCache open(eye, light, 1.0, 33);
+  const double z = iris_plane_z(m);
+  int lit = 0, dark = 0;
+  // Across the edge in steps much finer than the nodes' 0.4 mm, off the
+  // nodes' columns.
+  for (double y = -1.0; y <= 3.0; y += 0.01) {
+    const Point3 p = world(eye, 0.77, y, z);
+    const Refraction path = solve_refraction(eye, p, light);
+    ASSERT_EQ(path.status, PathStatus::ok) << y;
+    const double crossing_y = (eye.eye_from_world() * path.anterior_point).y;
+    // The cache's crossing is interpolated: within a micrometre of the solver's.
+    if (std::abs(crossing_y - 1.0) < 1e-3) continue;
+    if (crossing_y < 1.0) {
+      ++lit;
+      EXPECT_GT(open.irradiance_w_m2(p), 0.0) << y;
+      EXPECT_DOUBLE_EQ(lidded.irradiance_w_m2(p), open.irradiance_w_m2(p)) << y;
+    } else {
+      ++dark;
+      EXPECT_EQ(lidded.irradiance_w_m2(p), 0.0) << y;
+    }
+  }
+  EXPECT_GT(lit, 50);
+  EXPECT_GT(dark, 50);
 }
 
 TEST(IrisIrradianceCache, RejectsBadInputs) {

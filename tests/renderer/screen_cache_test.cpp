@@ -82,6 +82,27 @@ TEST(VisibilityCache, KnowsNothingWhereTheNodesSeeAnotherSurface) {
   EXPECT_EQ(cache.at(far_from_seam, find(far_from_seam)).known, 1u);
 }
 
+// At an outline, three nodes may serve a point and the fourth see another
+// surface. A shadow edge cannot part a point inside the three's triangle
+// from all three, so there they settle it; beyond, toward the fourth node,
+// the shadow ray is traced.
+TEST(VisibilityCache, ThreeNodesSettleOnlyThePointsInsideTheirTriangle) {
+  const Camera camera = test_camera();
+  // Another surface where u + v >= 43.5: of the cell from (30, 10) to
+  // (32, 12), only the node at (32, 12) sees it.
+  const auto find = [&](const Pixel& p) {
+    DiffusePoint q = plane_point(camera, p);
+    q.owner = p.u + p.v >= 43.5 ? 1 : 0;
+    return q;
+  };
+  const auto lit = [](const DiffusePoint&, std::size_t) { return true; };
+  const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, lit);
+  const Pixel inside{30.6, 10.9}, beyond{31.5, 11.2};  // u + v below 43.5 at both
+  EXPECT_EQ(cache.at(inside, find(inside)).known, 1u);
+  EXPECT_EQ(cache.at(inside, find(inside)).lit, 1u);
+  EXPECT_EQ(cache.at(beyond, find(beyond)).known, 0u);
+}
+
 // Every light lights the plane but for a stripe of shadow between image
 // columns u0 and u1.
 VisibilityCache::Lit shadow_stripe(const Camera& camera, double u0, double u1) {

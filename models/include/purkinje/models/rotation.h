@@ -25,8 +25,14 @@ class Rotation {
   // Rotation by a rotation vector (axis times angle in radians), as OpenCV's rvec.
   static Rotation from_rotation_vector(const Vector3& axis_times_radians);
 
-  Vector3 operator*(const Vector3& v) const;
-  UnitVector3 operator*(const UnitVector3& v) const;
+  // Inline: on every ray's path.
+  Vector3 operator*(const Vector3& v) const {
+    return {m_[0] * v.x + m_[1] * v.y + m_[2] * v.z, m_[3] * v.x + m_[4] * v.y + m_[5] * v.z,
+            m_[6] * v.x + m_[7] * v.y + m_[8] * v.z};
+  }
+  UnitVector3 operator*(const UnitVector3& v) const {
+    return UnitVector3::from_normalized_unchecked((*this) * v.vector());
+  }
   Rotation operator*(const Rotation& other) const;
   Rotation inverse() const;
   // Axis times angle in radians, angle in [0, pi].

@@ -49,7 +49,8 @@ class IrisIrradianceCache {
  public:
   // `visible(a, b)`: whether the segment from the light to a point on the
   // anterior cornea is unobstructed (eyelids, skin); may be empty (always
-  // visible). `resolution`: nodes per side (>= 2).
+  // visible). It is kept and called by lookups too, from any thread: what
+  // it refers to must outlive the cache. `resolution`: nodes per side (>= 2).
   using Visibility = std::function<bool(const Point3& light, const Point3& cornea_point)>;
   IrisIrradianceCache(const Eye& eye, const Point3& light_position, double radiant_intensity_w_sr,
                       int resolution, const Visibility& visible = {});
@@ -62,6 +63,9 @@ class IrisIrradianceCache {
 
  private:
   Pose eye_from_world_;
+  Pose world_from_eye_;
+  Point3 light_world_;
+  Visibility visible_;
   double iris_plane_z_mm_ = 0;  // eye frame
   double half_size_mm_ = 0;
   int resolution_ = 0;
@@ -74,11 +78,17 @@ class IrisIrradianceCache {
   // beyond the paths hold their continuation or an extrapolation, so that
   // the lit region's edges fall exactly inside cells. Nodes farther out
   // hold nothing (known = false), and a lookup that needs one is dark.
+  // S ignores shadows: each node says whether the light reaches it (lit),
+  // and where a lookup's nodes disagree (an eyelid's shadow edge crosses
+  // them) the light is asked for exactly at the interpolated crossing, so
+  // that shadow edges are sharp where they should be instead of smeared
+  // over the interpolation's four nodes.
   struct GridNode {
     double spread_w_m2 = 0;
     double chart_u_mm = 0;
     double chart_v_mm = 0;
     bool known = false;
+    bool lit = true;
   };
   // Eye frame: the light, the anterior cornea and the disc of the iris
   // plane inside the cornea.

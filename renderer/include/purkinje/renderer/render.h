@@ -45,9 +45,9 @@ struct RenderOptions {
   int samples_per_pixel = 1;
   // Adaptive sampling (fast mode): when larger than samples_per_pixel, the
   // pixels that the first pass finds on outlines, textures or shadow edges
-  // are rendered again with this many rays. 0: off. The reference mode
-  // samples every pixel alike: choosing pixels by their noisy first
-  // samples would bias it.
+  // are rendered again, strong edges with this many rays, the others with
+  // fewer (docs/rendering.md). 0: off. The reference mode samples every
+  // pixel alike: choosing pixels by their noisy first samples would bias it.
   int edge_samples_per_pixel = 16;
   std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
   bool noise = true;              // false: no shot or read noise whatever the sensor says

@@ -854,21 +854,51 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   // share Embree's traversal (a third off each ray's cost).
   constexpr int kPacket = 16;
 
-  // A pixel's samples: radiance, electrons and AOVs. With `centre` the
-  // first pass's lone centre sample, read back from the planes, is one of
-  // them and `samples - 1` more are traced. A lone sample's first hit may
-  // be given (`centre_hit`, traced with its row's packet). (A refined pixel
-  // traces its first-pass samples again when there were several: simpler
-  // than keeping every pixel's partial sums.)
-  const auto render_pixel = [&](int x, int y, int samples, bool centre, const Hit* centre_hit) {
+  // A pixel's planes from its samples' sum, the record of the class most
+  // of them saw, and how many saw each class and the cornea.
+  const auto store_pixel = [&](int x, int y, const Contribution& sum, int samples, const UnitVector3& centre_ray,
+                               const PrimaryRecord& r, const std::array<int, kClasses>& counts, int cornea_hits) {
+    result.radiance.at(x, y) = static_cast<float>(sum.radiance / samples);
+    diffuse_electrons.at(x, y) = static_cast<float>(sum.electrons / samples * vignetting_at(centre_ray));
+    id.at(x, y) = static_cast<float>(static_cast<int>(r.pixel_class));
+    depth.at(x, y) = r.hit ? static_cast<float>(r.depth_mm) : 0.0f;
+    nx.at(x, y) = static_cast<float>(r.normal.x);
+    ny.at(x, y) = static_cast<float>(r.normal.y);
+    nz.at(x, y) = static_cast<float>(r.normal.z);
+    for (int c = 0; c < kClasses; ++c) coverage[c].at(x, y) = static_cast<float>(counts[c]) / samples;
+    cornea.at(x, y) = static_cast<float>(cornea_hits) / samples;
+  };
+
+  // A lone sample through the pixel's centre, exact where the radiance is
+  // linear across the pixel; its first hit may be given (`hit`, traced
+  // with its row's packet). Nothing to tally: the first pass of most
+  // images is this for every pixel.
+  const auto render_centre = [&](int x, int y, const Hit* hit) {
+    const Pixel image_position{double(x), double(y)};
+    const Ray ray = camera_ray(image_position);
+    Contribution sum;
+    PrimaryRecord record;
+    const std::uint64_t path = (static_cast<std::uint64_t>(y) * width + x) * edge_spp;
+    integrator->sample(ray, hit ? *hit : tracer.intersect(ray), image_position, path, sum, record, 1.0);
+    std::array<int, kClasses> counts{};
+    counts[static_cast<int>(record.pixel_class)] = 1;
+    store_pixel(x, y, sum, 1, ray.direction, record, counts, record.through_cornea ? 1 : 0);
+  };
+
+  // A pixel's `samples` (more than one) with a per-pixel shift of the R2
+  // sequence, which decorrelates pixels; traced in packets. With `centre`
+  // the first pass's lone centre sample, read back from the planes, is one
+  // of them and `samples - 1` more are traced. (A refined pixel traces its
+  // first-pass samples again when there were several: simpler than
+  // keeping every pixel's partial sums.)
+  const auto render_pixel = [&](int x, int y, int samples, bool centre) {
     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
-    const double shift_u = samples > 1 ? uniform01(options.seed, kJitterStream, 2 * pixel) : 0.0;
-    const double shift_v = samples > 1 ? uniform01(options.seed, kJitterStream, 2 * pixel + 1) : 0.0;
+    const double shift_u = uniform01(options.seed, kJitterStream, 2 * pixel);
+    const double shift_v = uniform01(options.seed, kJitterStream, 2 * pixel + 1);
     Contribution sum;
     std::array<int, kClasses> counts{};
     std::array<PrimaryRecord, kClasses> first_of_class{};
     int cornea_hits = 0;
-    std::optional<UnitVector3> centre_ray;
     if (centre) {
       PrimaryRecord& r = first_of_class[static_cast<int>(id.at(x, y))];
       r.pixel_class = static_cast<PixelClass>(id.at(x, y));
@@ -877,9 +907,8 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       r.normal = {nx.at(x, y), ny.at(x, y), nz.at(x, y)};
       counts[static_cast<int>(r.pixel_class)] = 1;
       cornea_hits = cornea.at(x, y) > 0 ? 1 : 0;
-      centre_ray = camera.back_project({double(x), double(y)});
       sum.radiance = result.radiance.at(x, y);
-      sum.electrons = diffuse_electrons.at(x, y) / vignetting_at(*centre_ray);
+      sum.electrons = diffuse_electrons.at(x, y) / vignetting_at(camera.back_project({double(x), double(y)}));
     }
     // With the centre sample kept, the first new sample traces the cornea's
     // reflection for all the new ones, and the others none: the
@@ -889,50 +918,29 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       if (!centre || options.mode != RenderMode::fast) return 1.0;
       return s == 1 ? static_cast<double>(samples - 1) : 0.0;
     };
-    const auto add_sample = [&](const Ray& ray, const Hit& hit, const Pixel& image_position, int s) {
-      PrimaryRecord record;
-      integrator->sample(ray, hit, image_position, pixel * edge_spp + s, sum, record, reflection_weight(s));
-      const int c = static_cast<int>(record.pixel_class);
-      if (counts[c]++ == 0) first_of_class[c] = record;
-      cornea_hits += record.through_cornea ? 1 : 0;
-    };
-    if (samples == 1) {
-      // One sample alone sits at the centre, exact where the radiance is
-      // linear across the pixel.
-      const Pixel image_position{double(x), double(y)};
-      const Ray ray = camera_ray(image_position);
-      centre_ray = ray.direction;
-      add_sample(ray, centre_hit ? *centre_hit : tracer.intersect(ray), image_position, 0);
-    } else {
-      // More follow the R2 sequence with a per-pixel random shift, which
-      // decorrelates pixels; traced in packets.
-      std::array<Pixel, kPacket> positions;
-      std::array<Ray, kPacket> rays;
-      std::array<Hit, kPacket> hits;
-      for (int first = centre ? 1 : 0; first < samples; first += kPacket) {
-        const int count = std::min(kPacket, samples - first);
-        for (int i = 0; i < count; ++i) {
-          const auto [ou, ov] = subpixel_offset_r2(first + i, shift_u, shift_v);
-          positions[i] = {x - 0.5 + ou, y - 0.5 + ov};
-          rays[i] = camera_ray(positions[i]);
-        }
-        tracer.intersect(std::span<const Ray>(rays.data(), count), std::span<Hit>(hits.data(), count));
-        for (int i = 0; i < count; ++i) add_sample(rays[i], hits[i], positions[i], first + i);
+    std::array<Pixel, kPacket> positions;
+    std::array<Ray, kPacket> rays;
+    std::array<Hit, kPacket> hits;
+    for (int first = centre ? 1 : 0; first < samples; first += kPacket) {
+      const int count = std::min(kPacket, samples - first);
+      for (int i = 0; i < count; ++i) {
+        const auto [ou, ov] = subpixel_offset_r2(first + i, shift_u, shift_v);
+        positions[i] = {x - 0.5 + ou, y - 0.5 + ov};
+        rays[i] = camera_ray(positions[i]);
+      }
+      tracer.intersect(std::span<const Ray>(rays.data(), count), std::span<Hit>(hits.data(), count));
+      for (int i = 0; i < count; ++i) {
+        PrimaryRecord record;
+        const int s = first + i;
+        integrator->sample(rays[i], hits[i], positions[i], pixel * edge_spp + s, sum, record, reflection_weight(s));
+        const int c = static_cast<int>(record.pixel_class);
+        if (counts[c]++ == 0) first_of_class[c] = record;
+        cornea_hits += record.through_cornea ? 1 : 0;
       }
     }
-    const double vignetting = vignetting_at(centre_ray ? *centre_ray : camera.back_project({double(x), double(y)}));
-    result.radiance.at(x, y) = static_cast<float>(sum.radiance / samples);
-    diffuse_electrons.at(x, y) = static_cast<float>(sum.electrons / samples * vignetting);
-
     const int majority = static_cast<int>(std::max_element(counts.begin(), counts.end()) - counts.begin());
-    const PrimaryRecord& r = first_of_class[majority];
-    id.at(x, y) = static_cast<float>(majority);
-    depth.at(x, y) = r.hit ? static_cast<float>(r.depth_mm) : 0.0f;
-    nx.at(x, y) = static_cast<float>(r.normal.x);
-    ny.at(x, y) = static_cast<float>(r.normal.y);
-    nz.at(x, y) = static_cast<float>(r.normal.z);
-    for (int c = 0; c < kClasses; ++c) coverage[c].at(x, y) = static_cast<float>(counts[c]) / samples;
-    cornea.at(x, y) = static_cast<float>(cornea_hits) / samples;
+    store_pixel(x, y, sum, samples, camera.back_project({double(x), double(y)}), first_of_class[majority], counts,
+                cornea_hits);
   };
 
   // Rows y0 <= y < y1 in parallel, reporting progress from `progress_from`
@@ -952,7 +960,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   const double first_pass_span = edge_spp > spp ? 0.5 : 1.0;
   each_row(traced.y0, traced.y1, 0.0, first_pass_span, [&](int y) {
     if (spp > 1) {
-      for (int x = traced.x0; x < traced.x1; ++x) render_pixel(x, y, spp, false, nullptr);
+      for (int x = traced.x0; x < traced.x1; ++x) render_pixel(x, y, spp, false);
       return;
     }
     // Lone centre rays: a packet along the row.
@@ -962,7 +970,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       const int count = std::min(kPacket, traced.x1 - x0);
       for (int i = 0; i < count; ++i) rays[i] = camera_ray({double(x0 + i), double(y)});
       tracer.intersect(std::span<const Ray>(rays.data(), count), std::span<Hit>(hits.data(), count));
-      for (int i = 0; i < count; ++i) render_pixel(x0 + i, y, 1, false, &hits[i]);
+      for (int i = 0; i < count; ++i) render_centre(x0 + i, y, &hits[i]);
     }
   });
   if (edge_spp > spp) {
@@ -978,7 +986,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
                             : refine == Refine::texture && iris ? iris_texture_spp
                                                                 : ordinary_spp;
         // After a lone centre sample, the refined pixel keeps it.
-        render_pixel(x, y, samples, spp == 1, nullptr);
+        render_pixel(x, y, samples, spp == 1);
       }
     });
     // The margin: outside the region, so left at 0 as promised.

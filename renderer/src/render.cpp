@@ -374,7 +374,7 @@ class FastIntegrator final : public PathIntegrator {
   void interreflection(const DiffusePoint& p, double scaled_albedo, const Primary& primary,
                        Contribution& out) const {
     constexpr std::size_t kStackLights = 16;
-    std::array<double, kStackLights> stack{};
+    std::array<double, kStackLights> stack;  // written by the cache or the gather
     std::vector<double> heap(lights_.size() > kStackLights ? lights_.size() : 0);
     double* e = heap.empty() ? stack.data() : heap.data();
     if (!diffuse_->irradiance(primary.image_position, p, e)) {

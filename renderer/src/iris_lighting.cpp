@@ -488,7 +488,7 @@ double IrisIrradianceCache::irradiance_w_m2(const Point3& iris_plane_point) cons
   const Vector3 from_light = crossing - light_mm_;
   const double c = -dot(from_light, normal) / (from_light.norm() * normal.norm());
   if (!(c > 0)) return 0;
-  if (any_hidden && !visible_(light_world_, world_from_eye_ * crossing)) return 0;
+  if (any_hidden && visible_ && !visible_(light_world_, world_from_eye_ * crossing)) return 0;
   return spread * c * (1.0 - fresnel_reflectance(c, 1.0, anterior_inner_index_));
 }
 

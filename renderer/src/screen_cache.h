@@ -179,8 +179,9 @@ class VisibilityCache {
   VisibilityCache(const Camera& camera, const PixelRegion& region, const GridSpacing& spacing,
                   std::size_t lights, const FindDiffusePoint& find, const Lit& lit);
 
-  // The lights at `p`, seen at `image_position`, on which four nodes that
-  // serve the point agree; nothing is known when fewer serve it.
+  // The lights at `p`, seen at `image_position`, on which the four nodes
+  // of its cell agree when all serve the point, or three that serve it
+  // when it lies inside their triangle; nothing is known otherwise.
   Agreement at(const Pixel& image_position, const DiffusePoint& p) const;
 
  private:

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -379,7 +380,7 @@ TEST(IrisIrradianceCache, LightBehindTheEyeGivesNothing) {
 TEST(IrisIrradianceCache, HiddenCorneaGivesNothing) {
   const EyeModel m = navarro_eye();
   const Eye eye = posed(m);
-  int calls = 0;
+  std::atomic<int> calls = 0;  // the cache asks from several threads
   const IrisIrradianceCache cache(eye, light_at(eye, 10 * kDeg, 400), 1.0, 17,
                                   [&calls](const Point3&, const Point3&) {
                                     ++calls;

@@ -85,22 +85,35 @@ TEST(VisibilityCache, KnowsNothingWhereTheNodesSeeAnotherSurface) {
 // At an outline, three nodes may serve a point and the fourth see another
 // surface. A shadow edge cannot part a point inside the three's triangle
 // from all three, so there they settle it; beyond, toward the fourth node,
-// the shadow ray is traced.
+// the shadow ray is traced. Each of the cell's four corners in turn sees
+// the other surface: of the cell from (30, 10) to (32, 12), only the
+// corner beyond a diagonal line (u + v or u - v at a threshold).
 TEST(VisibilityCache, ThreeNodesSettleOnlyThePointsInsideTheirTriangle) {
   const Camera camera = test_camera();
-  // Another surface where u + v >= 43.5: of the cell from (30, 10) to
-  // (32, 12), only the node at (32, 12) sees it.
-  const auto find = [&](const Pixel& p) {
-    DiffusePoint q = plane_point(camera, p);
-    q.owner = p.u + p.v >= 43.5 ? 1 : 0;
-    return q;
-  };
   const auto lit = [](const DiffusePoint&, std::size_t) { return true; };
-  const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, lit);
-  const Pixel inside{30.6, 10.9}, beyond{31.5, 11.2};  // u + v below 43.5 at both
-  EXPECT_EQ(cache.at(inside, find(inside)).known, 1u);
-  EXPECT_EQ(cache.at(inside, find(inside)).lit, 1u);
-  EXPECT_EQ(cache.at(beyond, find(beyond)).known, 0u);
+  struct Case {
+    double sum_sign, difference_sign, threshold;  // other surface: s (u + v) + d (u - v) >= threshold
+    Pixel inside, beyond;                         // both on the plane's surface
+  };
+  const Case cases[] = {
+      {+1, 0, 43.5, {30.6, 10.9}, {31.5, 11.2}},   // corner (32, 12) beyond u + v = 43.5
+      {-1, 0, -40.5, {31.4, 11.1}, {30.5, 10.8}},  // corner (30, 10) before u + v = 40.5
+      {0, +1, 21.5, {30.6, 11.4}, {31.4, 10.5}},   // corner (32, 10) beyond u - v = 21.5
+      {0, -1, -18.5, {31.4, 10.6}, {30.5, 11.4}},  // corner (30, 12) before u - v = 18.5
+  };
+  for (const Case& c : cases) {
+    const auto find = [&](const Pixel& p) {
+      DiffusePoint q = plane_point(camera, p);
+      q.owner = c.sum_sign * (p.u + p.v) + c.difference_sign * (p.u - p.v) >= c.threshold ? 1 : 0;
+      return q;
+    };
+    const VisibilityCache cache(camera, kWhole, kTwoPx, 1, find, lit);
+    ASSERT_EQ(find(c.inside).owner, 0);
+    ASSERT_EQ(find(c.beyond).owner, 0);
+    EXPECT_EQ(cache.at(c.inside, find(c.inside)).known, 1u) << c.threshold;
+    EXPECT_EQ(cache.at(c.inside, find(c.inside)).lit, 1u) << c.threshold;
+    EXPECT_EQ(cache.at(c.beyond, find(c.beyond)).known, 0u) << c.threshold;
+  }
 }
 
 // Every light lights the plane but for a stripe of shadow between image

@@ -82,7 +82,7 @@ class IrisIrradianceCache {
   // and where a lookup's nodes disagree (an eyelid's shadow edge crosses
   // them) the light is asked for exactly at the interpolated crossing, so
   // that shadow edges are sharp where they should be instead of smeared
-  // over the interpolation's four nodes.
+  // over the interpolation's nodes.
   struct GridNode {
     double spread_w_m2 = 0;
     double chart_u_mm = 0;

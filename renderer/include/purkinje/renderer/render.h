@@ -66,8 +66,9 @@ struct RenderOptions {
   std::function<void(double fraction)> progress;
 };
 
-// The rays a pixel that adaptive sampling refines gets: samples_per_pixel
-// when it is off (reference mode, or edge samples no more than samples).
+// The most rays a pixel that adaptive sampling refines gets (on a strong
+// edge): samples_per_pixel when it is off (reference mode, or edge samples
+// no more than samples).
 int edge_samples_per_pixel(const RenderOptions& options);
 
 // Pixel classes of the segmentation AOV ("id"): the first diffuse surface

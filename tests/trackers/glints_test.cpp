@@ -1,0 +1,179 @@
+// The blob glint detector on synthetic images whose glint centres are known
+// in closed form (a Gaussian spot integrated over each pixel), and on the
+// renderer's images against their labels.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "purkinje/trackers/glints.h"
+
+namespace purkinje::trackers {
+namespace {
+
+struct Spot {
+  double u, v;         // centre
+  double energy_dn;    // summed over the pixels
+  double sigma_px;
+};
+
+// Background `level + slope * u`, plus spots integrated over each pixel
+// (pixel centres at integers), rounded and clipped as a sensor's ADC does,
+// plus Gaussian noise of `noise_dn`.
+cv::Mat synthetic(int width, int height, const std::vector<Spot>& spots, double level, double slope,
+                  double noise_dn = 0, int depth = CV_8U, unsigned seed = 1) {
+  const double top = depth == CV_8U ? 255 : 65535;
+  const double scale = top / 255;  // spots and background are given in 8-bit numbers
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, noise_dn);
+  cv::Mat image(height, width, depth);
+  const auto mass = [](double lo, double hi, double centre, double sigma) {
+    return 0.5 * (std::erf((hi - centre) / (sigma * std::sqrt(2.0))) - std::erf((lo - centre) / (sigma * std::sqrt(2.0))));
+  };
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      double value = level + slope * x;
+      for (const Spot& s : spots) {
+        value += s.energy_dn * mass(x - 0.5, x + 0.5, s.u, s.sigma_px) * mass(y - 0.5, y + 0.5, s.v, s.sigma_px);
+      }
+      if (noise_dn > 0) value += noise(rng);
+      const double dn = std::clamp(std::round(value * scale), 0.0, top);
+      if (depth == CV_8U) {
+        image.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(dn);
+      } else {
+        image.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(dn);
+      }
+    }
+  }
+  return image;
+}
+
+// The centroid of a pixel-integrated Gaussian of sigma >= 0.7 px lies within
+// 1e-4 px of its centre (the sampling's periodic bias is of order
+// exp(-2 pi^2 sigma^2) / pi); rounding to whole DN and the centroid's disc,
+// which leaves the farthest tails out, add a few thousandths (measured:
+// 0.009 px at worst).
+TEST(BlobGlintDetector, FindsSubPixelCentresOfSpotsOnASlopedBackground) {
+  const BlobGlintDetector detector;
+  double worst = 0;
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 5; ++j) {
+      const Spot spot{30 + 0.2 * i, 20 + 0.2 * j + 0.1, 600, 0.7};
+      const std::vector<Glint> glints = detector.detect(synthetic(64, 48, {spot}, 40, 0.5));
+      ASSERT_EQ(glints.size(), 1u) << i << ", " << j;
+      worst = std::max(worst, std::hypot(glints[0].centre.u - spot.u, glints[0].centre.v - spot.v));
+      EXPECT_FALSE(glints[0].saturated);
+      EXPECT_NEAR(glints[0].energy_dn, 600, 30);
+    }
+  }
+  EXPECT_LT(worst, 0.02);
+  RecordProperty("worst_px", std::to_string(worst));
+}
+
+TEST(BlobGlintDetector, ASaturatedSpotKeepsItsCentre) {
+  const BlobGlintDetector detector;
+  // Peak 6000 / (2 pi 1.2^2) = 660 DN: clipped at 255 over a disc of pixels.
+  const Spot spot{31.37, 22.81, 6000, 1.2};
+  const std::vector<Glint> glints = detector.detect(synthetic(64, 48, {spot}, 60, 0));
+  ASSERT_EQ(glints.size(), 1u);
+  EXPECT_TRUE(glints[0].saturated);
+  EXPECT_NEAR(glints[0].centre.u, spot.u, 0.03);
+  EXPECT_NEAR(glints[0].centre.v, spot.v, 0.03);
+}
+
+TEST(BlobGlintDetector, SixteenBitImagesGiveTheSameCentres) {
+  const BlobGlintDetector detector;
+  const Spot spot{17.33, 25.71, 500, 0.8};
+  const std::vector<Glint> eight = detector.detect(synthetic(40, 40, {spot}, 50, 0, 0, CV_8U));
+  const std::vector<Glint> sixteen = detector.detect(synthetic(40, 40, {spot}, 50, 0, 0, CV_16U));
+  ASSERT_EQ(eight.size(), 1u);
+  ASSERT_EQ(sixteen.size(), 1u);
+  // Both near the true centre and near each other.
+  EXPECT_NEAR(sixteen[0].centre.u, spot.u, 0.02);
+  EXPECT_NEAR(sixteen[0].centre.v, spot.v, 0.02);
+  EXPECT_NEAR(eight[0].centre.u, sixteen[0].centre.u, 0.02);
+  EXPECT_NEAR(eight[0].centre.v, sixteen[0].centre.v, 0.02);
+}
+
+TEST(BlobGlintDetector, NoiseAloneGivesNoGlintsAndNoisySpotsStayClose) {
+  const BlobGlintDetector detector;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    EXPECT_TRUE(detector.detect(synthetic(80, 60, {}, 120, 0.3, 3.0, CV_8U, seed)).empty()) << seed;
+  }
+  double worst = 0;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const Spot spot{40.3, 29.6, 800, 0.8};
+    const std::vector<Glint> glints = detector.detect(synthetic(80, 60, {spot}, 120, 0.3, 3.0, CV_8U, seed));
+    ASSERT_EQ(glints.size(), 1u) << seed;
+    worst = std::max(worst, std::hypot(glints[0].centre.u - spot.u, glints[0].centre.v - spot.v));
+  }
+  // Noise of 3 DN on about 20 weighed pixels against 800 DN of signal.
+  EXPECT_LT(worst, 0.1);
+  RecordProperty("worst_noisy_px", std::to_string(worst));
+}
+
+TEST(BlobGlintDetector, SeparatesNearbyGlintsAndOrdersThemByEnergy) {
+  const BlobGlintDetector detector;
+  const std::vector<Spot> spots{{20.2, 20.4, 400, 0.7}, {25.6, 20.1, 900, 0.7}, {22.9, 25.3, 600, 0.7}};
+  const std::vector<Glint> glints = detector.detect(synthetic(48, 48, spots, 30, 0));
+  ASSERT_EQ(glints.size(), 3u);
+  EXPECT_NEAR(glints[0].centre.u, 25.6, 0.05);  // the brightest first
+  EXPECT_NEAR(glints[1].centre.u, 22.9, 0.05);
+  EXPECT_NEAR(glints[2].centre.u, 20.2, 0.05);
+}
+
+TEST(BlobGlintDetector, ABrightRegionLargerThanAnyGlintIsNotOne) {
+  const BlobGlintDetector detector;
+  cv::Mat image(60, 60, CV_8U, cv::Scalar(40));
+  image(cv::Rect(10, 10, 31, 31)).setTo(cv::Scalar(250));
+  EXPECT_TRUE(detector.detect(image).empty());
+}
+
+TEST(BlobGlintDetector, GlintsAtTheImagesEdgeAreFoundWithoutReadingOutside) {
+  const BlobGlintDetector detector;
+  const Spot corner{0.4, 0.3, 600, 0.7};
+  const std::vector<Glint> glints = detector.detect(synthetic(32, 32, {corner}, 40, 0));
+  ASSERT_EQ(glints.size(), 1u);
+  // Half the spot lies outside the image: the centroid of what remains
+  // moves inward, but stays on the corner pixel.
+  EXPECT_LT(std::hypot(glints[0].centre.u, glints[0].centre.v), 1.0);
+}
+
+TEST(BlobGlintDetector, RejectsImagesItCannotReadNamingTheRule) {
+  const BlobGlintDetector detector;
+  EXPECT_THROW(detector.detect(cv::Mat()), std::invalid_argument);
+  try {
+    detector.detect(cv::Mat(10, 10, CV_8UC3, cv::Scalar(0, 0, 0)));
+    FAIL() << "a colour image was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("single-channel 8- or 16-bit"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(detector.detect(cv::Mat(10, 10, CV_32F, cv::Scalar(0))), std::invalid_argument);
+}
+
+TEST(BlobGlintDetector, RejectsSettingsOutOfRangeNamingThem) {
+  BlobGlintSettings s;
+  s.threshold = 0;
+  try {
+    BlobGlintDetector{s};
+    FAIL() << "threshold 0 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("threshold"), std::string::npos) << e.what();
+  }
+  s = {};
+  s.min_area_px = 10;
+  s.max_area_px = 5;
+  EXPECT_THROW(BlobGlintDetector{s}, std::invalid_argument);
+  s = {};
+  s.background_radius_px = 0;
+  EXPECT_THROW(BlobGlintDetector{s}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace purkinje::trackers

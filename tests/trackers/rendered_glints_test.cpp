@@ -1,0 +1,87 @@
+// The blob glint detector on the renderer's noisy sensor images, against
+// the labels: every visible glint found, near its label, and nothing else
+// found. (The 500-render bar of the trackers issue is measured by
+// `purkinje track`; this is its everyday check.)
+
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "purkinje/models/scene_file.h"
+#include "purkinje/renderer/render.h"
+#include "purkinje/trackers/glints.h"
+
+namespace purkinje::trackers {
+namespace {
+
+cv::Mat to_mat(const renderer::SensorImage& s) {
+  cv::Mat out(s.height, s.width, s.bits <= 8 ? CV_8U : CV_16U);
+  for (int y = 0; y < s.height; ++y) {
+    for (int x = 0; x < s.width; ++x) {
+      const unsigned short v = s.values[static_cast<std::size_t>(y) * s.width + x];
+      if (s.bits <= 8) {
+        out.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(v);
+      } else {
+        out.at<std::uint16_t>(y, x) = v;
+      }
+    }
+  }
+  return out;
+}
+
+// `accurate`: also within 0.1 px on average. The headset's glints are not
+// yet: they saturate on the pupil's edge, where the brighter iris side
+// widens the clipped plateau toward itself (mean 0.18 px, the trackers
+// issue's bar is 0.1); found, and nothing else found, they are.
+void expect_glints_found(const std::string& name, bool accurate) {
+  const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
+  const BlobGlintDetector detector;
+  double sum = 0, worst = 0;
+  int visible = 0, found = 0, spurious = 0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    renderer::RenderOptions options;
+    options.seed = seed;  // sensor noise differs; the scene does not
+    options.edge_samples_per_pixel = 8;
+    const renderer::RenderResult r = renderer::render(scene, 0, options);
+    const std::vector<Glint> glints = detector.detect(to_mat(r.sensor));
+    std::vector<bool> used(glints.size(), false);
+    for (const EyeInCameraTruth& view : r.truth.views) {
+      for (const GlintTruth& g : view.glints) {
+        if (g.status != PathStatus::ok) continue;
+        ++visible;
+        int nearest = -1;
+        double best = 2.0;  // px: a detection farther off is another glint's or none
+        for (std::size_t i = 0; i < glints.size(); ++i) {
+          const double d = std::hypot(glints[i].centre.u - g.pixel.u, glints[i].centre.v - g.pixel.v);
+          if (!used[i] && d < best) best = d, nearest = static_cast<int>(i);
+        }
+        if (nearest < 0) continue;
+        used[nearest] = true;
+        ++found;
+        sum += best;
+        worst = std::max(worst, best);
+      }
+    }
+    for (const bool u : used) spurious += u ? 0 : 1;
+  }
+  ASSERT_GT(visible, 0);
+  EXPECT_EQ(found, visible);
+  EXPECT_EQ(spurious, 0);
+  if (accurate) {
+    EXPECT_LT(sum / found, 0.1);
+    EXPECT_LT(worst, 0.3);
+  }
+  ::testing::Test::RecordProperty(name + "_visible", visible);
+  ::testing::Test::RecordProperty(name + "_mean_px", std::to_string(sum / found));
+  ::testing::Test::RecordProperty(name + "_worst_px", std::to_string(worst));
+}
+
+TEST(BlobGlintDetectorOnRenders, FindsTheRemoteScenesGlintsNearTheirLabels) { expect_glints_found("remote", true); }
+TEST(BlobGlintDetectorOnRenders, FindsTheHeadsetScenesGlintsAndNothingElse) { expect_glints_found("headset", false); }
+
+}  // namespace
+}  // namespace purkinje::trackers

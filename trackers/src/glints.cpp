@@ -1,0 +1,134 @@
+#include "purkinje/trackers/glints.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace purkinje::trackers {
+
+namespace {
+
+// The largest value of an image's type: where a sensor saturates.
+double full_scale(const cv::Mat& image) { return image.depth() == CV_8U ? 255.0 : 65535.0; }
+
+void check_image(const cv::Mat& image) {
+  if (image.empty()) throw std::invalid_argument("BlobGlintDetector: the image is empty");
+  if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U)) {
+    throw std::invalid_argument("BlobGlintDetector: image type " + cv::typeToString(image.type()) +
+                                ": must be single-channel 8- or 16-bit (CV_8UC1 or CV_16UC1)");
+  }
+}
+
+}  // namespace
+
+BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) {
+  const auto fail = [](const std::string& what) { throw std::invalid_argument("BlobGlintSettings: " + what); };
+  if (s.background_radius_px < 1 || s.background_radius_px > 100) {
+    fail("background_radius_px = " + std::to_string(s.background_radius_px) + ": must be in [1, 100]");
+  }
+  if (!(s.threshold > 0 && s.threshold < 1)) fail("threshold = " + std::to_string(s.threshold) + ": must be in (0, 1)");
+  if (!(s.relative_threshold >= 0 && s.relative_threshold < 1)) {
+    fail("relative_threshold = " + std::to_string(s.relative_threshold) + ": must be in [0, 1)");
+  }
+  if (s.min_area_px < 1 || s.max_area_px < s.min_area_px) {
+    fail("min_area_px = " + std::to_string(s.min_area_px) + ", max_area_px = " + std::to_string(s.max_area_px) +
+         ": must satisfy 1 <= min_area_px <= max_area_px");
+  }
+  if (s.centroid_margin_px < 0 || s.centroid_margin_px > 20) {
+    fail("centroid_margin_px = " + std::to_string(s.centroid_margin_px) + ": must be in [0, 20]");
+  }
+}
+
+std::vector<Glint> BlobGlintDetector::detect(const cv::Mat& image) const {
+  check_image(image);
+  cv::Mat grey;
+  image.convertTo(grey, CV_32F);
+  const double top = full_scale(image);
+  const int r = settings_.background_radius_px;
+  const cv::Mat disc = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
+  cv::Mat above;  // brightness above the local background
+  cv::morphologyEx(grey, above, cv::MORPH_TOPHAT, disc, {-1, -1}, 1, cv::BORDER_REPLICATE);
+
+  double brightest = 0;
+  cv::minMaxLoc(above, nullptr, &brightest);
+  const double threshold = std::max(settings_.threshold * top, settings_.relative_threshold * brightest);
+  cv::Mat blobs = above > threshold;
+  cv::Mat labels, stats, centroids;
+  const int count = cv::connectedComponentsWithStats(blobs, labels, stats, centroids, 8, CV_32S);
+
+  std::vector<Glint> glints;
+  const int m = settings_.centroid_margin_px;
+  for (int label = 1; label < count; ++label) {
+    const int area = stats.at<int>(label, cv::CC_STAT_AREA);
+    if (area < settings_.min_area_px || area > settings_.max_area_px) continue;
+    const cv::Rect box(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
+                       stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
+    // The blob and a ring of `m` pixels around it (the point-spread
+    // function's tails), and farther out, to the background disc's radius,
+    // the surroundings; all within the image.
+    const int reach = std::max(r, m + 1);
+    const cv::Rect window =
+        (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & cv::Rect(0, 0, image.cols, image.rows);
+    const cv::Mat blob = labels(window) == label;
+    cv::Mat weighed, surroundings;
+    cv::dilate(blob, weighed, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * m + 1, 2 * m + 1}));
+    cv::dilate(blob, surroundings, disc);
+    surroundings &= ~weighed & ~blobs(window);  // other glints nearby are not the background
+    // A glint stands out from all around it: a small bright part of a
+    // larger bright region (the corner of a bright patch, which the
+    // opening's disc cannot reach into) does not.
+    double around_max = 0;
+    cv::minMaxLoc(grey(window), nullptr, &around_max, nullptr, nullptr, surroundings);
+    double blob_max = 0;
+    cv::minMaxLoc(grey(window), nullptr, &blob_max, nullptr, nullptr, blob);
+    if (blob_max - around_max < 0.5 * threshold) continue;
+    // The top-hat's own level around the glint (noise leaves it above
+    // zero) is taken off the weights, so that the ring's noise does not
+    // pull the centroid toward the ring's middle.
+    const double pedestal = cv::countNonZero(surroundings) > 0 ? cv::mean(above(window), surroundings)[0] : 0.0;
+    // The centroid over a disc about the centre found so far, twice: a
+    // disc, unlike the blob's own outline, cuts a symmetric spot's tails
+    // evenly, and other blobs are left out.
+    const double radius = std::sqrt(area / std::numbers::pi) + m + 0.5;
+    Pixel centre{stats.at<int>(label, cv::CC_STAT_LEFT) + 0.5 * (box.width - 1),
+                 stats.at<int>(label, cv::CC_STAT_TOP) + 0.5 * (box.height - 1)};
+    double sum = 0, peak = 0;
+    bool saturated = false;
+    for (int pass = 0; pass < 3; ++pass) {
+      double sum_u = 0, sum_v = 0;
+      sum = 0;
+      for (int y = 0; y < window.height; ++y) {
+        for (int x = 0; x < window.width; ++x) {
+          const int u = window.x + x, v = window.y + y;
+          if (std::hypot(u - centre.u, v - centre.v) > radius) continue;
+          const int other = labels.at<int>(v, u);
+          if (other != 0 && other != label) continue;
+          const double w = std::max(0.0, above.at<float>(v, u) - pedestal);
+          sum += w;
+          sum_u += w * u;
+          sum_v += w * v;
+          peak = std::max(peak, w);
+          saturated = saturated || grey.at<float>(v, u) >= top;
+        }
+      }
+      if (!(sum > 0)) break;
+      centre = {sum_u / sum, sum_v / sum};
+    }
+    if (!(sum > 0)) continue;
+    Glint g;
+    g.centre = centre;
+    g.energy_dn = sum;
+    g.peak_dn = peak;
+    g.area_px = area;
+    g.saturated = saturated;
+    glints.push_back(g);
+  }
+  std::sort(glints.begin(), glints.end(), [](const Glint& a, const Glint& b) { return a.energy_dn > b.energy_dn; });
+  return glints;
+}
+
+}  // namespace purkinje::trackers

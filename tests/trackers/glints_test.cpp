@@ -27,7 +27,8 @@ struct Spot {
 // (pixel centres at integers), rounded and clipped as a sensor's ADC does,
 // plus Gaussian noise of `noise_dn`.
 cv::Mat synthetic(int width, int height, const std::vector<Spot>& spots, double level, double slope,
-                  double noise_dn = 0, int depth = CV_8U, unsigned seed = 1) {
+                  double noise_dn = 0, int depth = CV_8U, unsigned seed = 1, double step_u = 1e9,
+                  double step_dn = 0) {
   const double top = depth == CV_8U ? 255 : 65535;
   const double scale = top / 255;  // spots and background are given in 8-bit numbers
   std::mt19937 rng(seed);
@@ -38,7 +39,7 @@ cv::Mat synthetic(int width, int height, const std::vector<Spot>& spots, double 
   };
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
-      double value = level + slope * x;
+      double value = level + slope * x + (x >= step_u ? step_dn : 0);  // a step: the pupil's edge
       for (const Spot& s : spots) {
         value += s.energy_dn * mass(x - 0.5, x + 0.5, s.u, s.sigma_px) * mass(y - 0.5, y + 0.5, s.v, s.sigma_px);
       }
@@ -85,6 +86,24 @@ TEST(BlobGlintDetector, ASaturatedSpotKeepsItsCentre) {
   EXPECT_TRUE(glints[0].saturated);
   EXPECT_NEAR(glints[0].centre.u, spot.u, 0.03);
   EXPECT_NEAR(glints[0].centre.v, spot.v, 0.03);
+}
+
+// A glint on the pupil's edge: dark on one side, the iris 90 DN brighter on
+// the other. Clipped at full scale, the plateau reaches farther on the
+// bright side; the centre comes from a fit of the spot to the unclipped
+// pixels above the background, not from the plateau's centroid.
+TEST(BlobGlintDetector, ASaturatedSpotOnAnEdgeKeepsItsCentre) {
+  const BlobGlintDetector detector;
+  double worst = 0;
+  for (const double du : {-0.6, -0.3, 0.0, 0.3, 0.6}) {
+    const Spot spot{31.2 + du, 22.4, 3000, 0.8};
+    const std::vector<Glint> glints = detector.detect(synthetic(64, 48, {spot}, 15, 0, 0, CV_8U, 1, 31.5, 90));
+    ASSERT_EQ(glints.size(), 1u) << du;
+    EXPECT_TRUE(glints[0].saturated);
+    worst = std::max(worst, std::hypot(glints[0].centre.u - spot.u, glints[0].centre.v - spot.v));
+  }
+  EXPECT_LT(worst, 0.05);
+  RecordProperty("worst_on_edge_px", std::to_string(worst));
 }
 
 TEST(BlobGlintDetector, SixteenBitImagesGiveTheSameCentres) {

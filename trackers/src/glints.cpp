@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -21,6 +22,94 @@ void check_image(const cv::Mat& image) {
     throw std::invalid_argument("BlobGlintDetector: image type " + cv::typeToString(image.type()) +
                                 ": must be single-channel 8- or 16-bit (CV_8UC1 or CV_16UC1)");
   }
+}
+
+// A spot's brightness over pixel (u, v): a Gaussian of total `energy`
+// and width `sigma` about `c`, integrated over the pixel.
+double spot_over_pixel(double u, double v, const Pixel& c, double energy, double sigma) {
+  const double k = 1 / (sigma * std::numbers::sqrt2);
+  const auto along = [k](double x, double centre) {
+    return 0.5 * (std::erf((x + 0.5 - centre) * k) - std::erf((x - 0.5 - centre) * k));
+  };
+  return energy * along(u, c.u) * along(v, c.v);
+}
+
+// What a saturated glint's pixels say: its brightness above the
+// background where unclipped, and where clipped only that it is at least
+// this much.
+struct SpotPixel {
+  int u, v;
+  double value;
+  bool at_least;
+};
+
+// Fits the spot (centre, energy, width) to the pixels by Levenberg-Marquardt,
+// from a start found by the centroid; a clipped pixel counts only where the
+// spot falls short of its bound. False when the fit does not settle.
+bool fit_spot(const std::vector<SpotPixel>& pixels, Pixel& centre, double& energy) {
+  double p[4] = {centre.u, centre.v, energy, 0.8};
+  const auto residuals = [&](const double* q, std::vector<double>& out) {
+    out.resize(pixels.size());
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      const double model = spot_over_pixel(pixels[i].u, pixels[i].v, {q[0], q[1]}, q[2], q[3]);
+      const double r = model - pixels[i].value;
+      out[i] = pixels[i].at_least ? std::min(r, 0.0) : r;
+    }
+  };
+  std::vector<double> r, r_plus, r_minus;
+  residuals(p, r);
+  const auto cost = [](const std::vector<double>& x) {
+    double c = 0;
+    for (const double e : x) c += e * e;
+    return c;
+  };
+  double lambda = 1e-3;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    // Jacobian by central differences (4 parameters, a few dozen pixels).
+    double jtj[4][4] = {}, jtr[4] = {};
+    std::vector<std::array<double, 4>> j(pixels.size());
+    for (int a = 0; a < 4; ++a) {
+      const double h = a == 2 ? 1e-4 * std::max(1.0, std::abs(p[2])) : 1e-5;
+      double q[4] = {p[0], p[1], p[2], p[3]};
+      q[a] = p[a] + h;
+      residuals(q, r_plus);
+      q[a] = p[a] - h;
+      residuals(q, r_minus);
+      for (std::size_t i = 0; i < pixels.size(); ++i) j[i][a] = (r_plus[i] - r_minus[i]) / (2 * h);
+    }
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      for (int a = 0; a < 4; ++a) {
+        jtr[a] += j[i][a] * r[i];
+        for (int b = 0; b < 4; ++b) jtj[a][b] += j[i][a] * j[i][b];
+      }
+    }
+    cv::Matx44d m;
+    cv::Vec4d g;
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) m(a, b) = jtj[a][b] + (a == b ? lambda * (jtj[a][a] + 1e-12) : 0.0);
+      g[a] = -jtr[a];
+    }
+    cv::Vec4d step;
+    if (!cv::solve(m, g, step, cv::DECOMP_CHOLESKY)) return false;
+    const double q[4] = {p[0] + step[0], p[1] + step[1], p[2] + step[2], std::clamp(p[3] + step[3], 0.3, 5.0)};
+    std::vector<double> r_new;
+    residuals(q, r_new);
+    if (cost(r_new) < cost(r)) {
+      std::copy(q, q + 4, p);
+      r = std::move(r_new);
+      lambda = std::max(lambda / 4, 1e-9);
+      if (std::hypot(step[0], step[1]) < 1e-6) break;
+    } else {
+      lambda *= 8;
+      if (lambda > 1e9) break;
+    }
+  }
+  if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && p[2] > 0)) return false;
+  // A fit that wandered off the blob is no better than the centroid.
+  if (std::hypot(p[0] - centre.u, p[1] - centre.v) > 1.5) return false;
+  centre = {p[0], p[1]};
+  energy = p[2];
+  return true;
 }
 
 }  // namespace
@@ -119,9 +208,26 @@ std::vector<Glint> BlobGlintDetector::detect(const cv::Mat& image) const {
       centre = {sum_u / sum, sum_v / sum};
     }
     if (!(sum > 0)) continue;
+    // A clipped plateau is symmetric only on an even background; on an
+    // edge (the pupil's) its brighter side reaches farther. The spot's
+    // unclipped flanks above the background tell its centre there.
+    double energy = sum;
+    if (saturated) {
+      std::vector<SpotPixel> pixels;
+      for (int y = 0; y < window.height; ++y) {
+        for (int x = 0; x < window.width; ++x) {
+          const int u = window.x + x, v = window.y + y;
+          if (std::hypot(u - centre.u, v - centre.v) > radius + 1) continue;
+          const int other = labels.at<int>(v, u);
+          if (other != 0 && other != label) continue;
+          pixels.push_back({u, v, above.at<float>(v, u) - pedestal, grey.at<float>(v, u) >= top});
+        }
+      }
+      fit_spot(pixels, centre, energy);
+    }
     Glint g;
     g.centre = centre;
-    g.energy_dn = sum;
+    g.energy_dn = energy;
     g.peak_dn = peak;
     g.area_px = area;
     g.saturated = saturated;

@@ -38,9 +38,11 @@ class GlintDetector {
 // from all around them are glints, and each one's centre is the centroid
 // of its top-hat brightness (less the level around it) over a disc about
 // the centre, found again twice: a disc cuts a symmetric spot's tails
-// evenly. A saturated glint keeps its centre when its background is even;
-// on an edge (the pupil's), the brighter side widens the clipped plateau
-// toward itself.
+// evenly. A saturated glint's clipped plateau is symmetric only on an
+// even background; on an edge (the pupil's) its brighter side reaches
+// farther, so a saturated glint's centre comes from a fit of a
+// pixel-integrated Gaussian to its unclipped flanks above the background
+// (a clipped pixel only bounds it from below).
 struct BlobGlintSettings {
   int background_radius_px = 6;   // the opening's disc: glints are narrower than its diameter
   // Blobs are what stands above the local background by more than both:

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "purkinje/models/optimizer.h"
+
 namespace purkinje::trackers {
 
 namespace {
@@ -43,72 +45,44 @@ struct SpotPixel {
   bool at_least;
 };
 
-// Fits the spot (centre, energy, width) to the pixels by Levenberg-Marquardt,
-// from a start found by the centroid; a clipped pixel counts only where the
-// spot falls short of its bound. False when the fit does not settle.
+// Fits the spot (centre, energy, width) to the pixels by least squares
+// (the optimizer facade), from a start found by the centroid; a clipped
+// pixel counts only where the spot falls short of its bound. False when
+// the fit fails or wanders off the blob.
 bool fit_spot(const std::vector<SpotPixel>& pixels, Pixel& centre, double& energy) {
-  double p[4] = {centre.u, centre.v, energy, 0.8};
-  const auto residuals = [&](const double* q, std::vector<double>& out) {
-    out.resize(pixels.size());
+  // Parameters: centre u and v, energy, log of the width (so that it stays positive).
+  std::array<double, 4> x{centre.u, centre.v, energy, std::log(0.8)};
+  const auto residuals_at = [&](const double* q, double* r) {
+    const double sigma = std::exp(q[3]);
     for (std::size_t i = 0; i < pixels.size(); ++i) {
-      const double model = spot_over_pixel(pixels[i].u, pixels[i].v, {q[0], q[1]}, q[2], q[3]);
-      const double r = model - pixels[i].value;
-      out[i] = pixels[i].at_least ? std::min(r, 0.0) : r;
+      const double d = spot_over_pixel(pixels[i].u, pixels[i].v, {q[0], q[1]}, q[2], sigma) - pixels[i].value;
+      r[i] = pixels[i].at_least ? std::min(d, 0.0) : d;
     }
   };
-  std::vector<double> r, r_plus, r_minus;
-  residuals(p, r);
-  const auto cost = [](const std::vector<double>& x) {
-    double c = 0;
-    for (const double e : x) c += e * e;
-    return c;
+  const std::size_t n = pixels.size();
+  std::vector<double> plus(n), minus(n);
+  const optimizer::ResidualFunction residuals = [&](const double* q, double* r, double* jacobian) {
+    if (!(std::abs(q[3]) < 3)) return false;  // a width between 0.05 and 20 px
+    residuals_at(q, r);
+    if (!jacobian) return true;
+    // By central differences: four parameters, a few dozen pixels.
+    for (int a = 0; a < 4; ++a) {
+      const double h = a == 2 ? 1e-6 * std::max(1.0, std::abs(q[2])) : 1e-6;
+      std::array<double, 4> shifted{q[0], q[1], q[2], q[3]};
+      shifted[a] = q[a] + h;
+      residuals_at(shifted.data(), plus.data());
+      shifted[a] = q[a] - h;
+      residuals_at(shifted.data(), minus.data());
+      for (std::size_t i = 0; i < n; ++i) jacobian[i * 4 + a] = (plus[i] - minus[i]) / (2 * h);
+    }
+    return true;
   };
-  double lambda = 1e-3;
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    // Jacobian by central differences (4 parameters, a few dozen pixels).
-    double jtj[4][4] = {}, jtr[4] = {};
-    std::vector<std::array<double, 4>> j(pixels.size());
-    for (int a = 0; a < 4; ++a) {
-      const double h = a == 2 ? 1e-4 * std::max(1.0, std::abs(p[2])) : 1e-5;
-      double q[4] = {p[0], p[1], p[2], p[3]};
-      q[a] = p[a] + h;
-      residuals(q, r_plus);
-      q[a] = p[a] - h;
-      residuals(q, r_minus);
-      for (std::size_t i = 0; i < pixels.size(); ++i) j[i][a] = (r_plus[i] - r_minus[i]) / (2 * h);
-    }
-    for (std::size_t i = 0; i < pixels.size(); ++i) {
-      for (int a = 0; a < 4; ++a) {
-        jtr[a] += j[i][a] * r[i];
-        for (int b = 0; b < 4; ++b) jtj[a][b] += j[i][a] * j[i][b];
-      }
-    }
-    cv::Matx44d m;
-    cv::Vec4d g;
-    for (int a = 0; a < 4; ++a) {
-      for (int b = 0; b < 4; ++b) m(a, b) = jtj[a][b] + (a == b ? lambda * (jtj[a][a] + 1e-12) : 0.0);
-      g[a] = -jtr[a];
-    }
-    cv::Vec4d step;
-    if (!cv::solve(m, g, step, cv::DECOMP_CHOLESKY)) return false;
-    const double q[4] = {p[0] + step[0], p[1] + step[1], p[2] + step[2], std::clamp(p[3] + step[3], 0.3, 5.0)};
-    std::vector<double> r_new;
-    residuals(q, r_new);
-    if (cost(r_new) < cost(r)) {
-      std::copy(q, q + 4, p);
-      r = std::move(r_new);
-      lambda = std::max(lambda / 4, 1e-9);
-      if (std::hypot(step[0], step[1]) < 1e-6) break;
-    } else {
-      lambda *= 8;
-      if (lambda > 1e9) break;
-    }
-  }
-  if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && p[2] > 0)) return false;
+  const optimizer::Summary summary = optimizer::solve(static_cast<int>(n), x, residuals);
+  if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !(x[2] > 0)) return false;
   // A fit that wandered off the blob is no better than the centroid.
-  if (std::hypot(p[0] - centre.u, p[1] - centre.v) > 1.5) return false;
-  centre = {p[0], p[1]};
-  energy = p[2];
+  if (summary.final_cost > summary.initial_cost || std::hypot(x[0] - centre.u, x[1] - centre.v) > 1.5) return false;
+  centre = {x[0], x[1]};
+  energy = x[2];
   return true;
 }
 

@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include "purkinje/models/optimizer.h"
+#include "purkinje/models/specular.h"
 
 namespace purkinje::trackers {
 
@@ -209,6 +211,122 @@ std::vector<Glint> BlobGlintDetector::detect(const cv::Mat& image) const {
   }
   std::sort(glints.begin(), glints.end(), [](const Glint& a, const Glint& b) { return a.energy_dn > b.energy_dn; });
   return glints;
+}
+
+namespace {
+
+// A similarity transform of the image plane: z -> q z + t, complex.
+struct Similarity {
+  std::complex<double> q{1, 0}, t{0, 0};
+  std::complex<double> operator()(std::complex<double> z) const { return q * z + t; }
+};
+
+std::complex<double> complex_of(const Pixel& p) { return {p.u, p.v}; }
+
+}  // namespace
+
+void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional<Pixel>>& expected,
+                     const GlintMatchSettings& s) {
+  for (Glint& g : glints) g.illuminator = -1;
+  std::vector<int> lights;
+  std::vector<std::complex<double>> places;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    if (!expected[i]) continue;
+    lights.push_back(static_cast<int>(i));
+    places.push_back(complex_of(*expected[i]));
+  }
+  // The brightest detections only: a pattern has as many glints as lights.
+  const std::size_t candidates = std::min(glints.size(), 2 * places.size() + 4);
+  if (places.size() < 2 || candidates < 2) return;
+  double spacing = INFINITY;  // the smallest distance between two expected glints
+  for (std::size_t i = 0; i < places.size(); ++i) {
+    for (std::size_t j = i + 1; j < places.size(); ++j) spacing = std::min(spacing, std::abs(places[i] - places[j]));
+  }
+  if (!(spacing > 0)) return;  // two lights at one place: their glints cannot be told apart
+  std::vector<std::complex<double>> found(candidates);
+  for (std::size_t k = 0; k < candidates; ++k) found[k] = complex_of(glints[k].centre);
+
+  // Nearest detection to each transformed expected glint within the gate:
+  // how many, and their squared distances' sum.
+  const auto score = [&](const Similarity& m, double gate, double& residual) {
+    int count = 0;
+    residual = 0;
+    for (const std::complex<double>& place : places) {
+      const std::complex<double> p = m(place);
+      double nearest = gate;
+      for (const std::complex<double>& f : found) nearest = std::min(nearest, std::abs(f - p));
+      if (nearest < gate) {
+        ++count;
+        residual += nearest * nearest;
+      }
+    }
+    return count;
+  };
+  Similarity best;
+  int best_count = 0;
+  double best_residual = INFINITY;
+  for (std::size_t a = 0; a < candidates; ++a) {
+    for (std::size_t b = 0; b < candidates; ++b) {
+      if (a == b) continue;
+      for (std::size_t i = 0; i < places.size(); ++i) {
+        for (std::size_t j = 0; j < places.size(); ++j) {
+          if (i == j) continue;
+          Similarity m;
+          m.q = (found[b] - found[a]) / (places[j] - places[i]);
+          const double scale = std::abs(m.q);
+          if (!(scale >= 1 / s.max_scale && scale <= s.max_scale) || std::abs(std::arg(m.q)) > s.max_rotation_rad) {
+            continue;
+          }
+          m.t = found[a] - m.q * places[i];
+          double residual = 0;
+          const int count = score(m, s.gate_fraction * spacing * scale, residual);
+          if (count > best_count || (count == best_count && residual < best_residual)) {
+            best = m;
+            best_count = count;
+            best_residual = residual;
+          }
+        }
+      }
+    }
+  }
+  if (best_count < 2) return;
+  // Each expected glint takes the nearest free detection within the gate,
+  // nearest pairs first.
+  const double gate = s.gate_fraction * spacing * std::abs(best.q);
+  struct Pair {
+    double distance;
+    std::size_t place, glint;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t i = 0; i < places.size(); ++i) {
+    const std::complex<double> p = best(places[i]);
+    for (std::size_t k = 0; k < candidates; ++k) {
+      const double d = std::abs(found[k] - p);
+      if (d < gate) pairs.push_back({d, i, k});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.distance < y.distance; });
+  std::vector<bool> place_used(places.size(), false);
+  for (const Pair& pair : pairs) {
+    if (place_used[pair.place] || glints[pair.glint].illuminator >= 0) continue;
+    place_used[pair.place] = true;
+    glints[pair.glint].illuminator = lights[pair.place];
+  }
+}
+
+std::vector<std::optional<Pixel>> nominal_glint_layout(const Camera& camera, const std::vector<Illuminator>& lights,
+                                                       const Eye& nominal_eye) {
+  std::vector<std::optional<Pixel>> layout;
+  for (const Illuminator& light : lights) {
+    const Reflection r = solve_reflection(nominal_eye, light.position, camera.center());
+    std::optional<Pixel> place;
+    if (r.status == PathStatus::ok) {
+      const Projection p = camera.project(r.point);
+      if (p.status != ProjectionStatus::behind_camera) place = p.pixel;
+    }
+    layout.push_back(place);
+  }
+  return layout;
 }
 
 }  // namespace purkinje::trackers

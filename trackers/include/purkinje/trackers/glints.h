@@ -6,9 +6,12 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <optional>
 #include <vector>
 
 #include "purkinje/models/camera.h"
+#include "purkinje/models/eye.h"
+#include "purkinje/models/illuminator.h"
 
 namespace purkinje::trackers {
 
@@ -62,5 +65,31 @@ class BlobGlintDetector final : public GlintDetector {
  private:
   BlobGlintSettings settings_;
 };
+
+// Which light made which glint. The glints of a set of lights form a
+// pattern that moves, scales and turns a little with the eye; `expected`
+// holds, per light, where its glint would be on a nominal eye (see
+// nominal_glint_layout; nullopt: the light has none there). The similarity transform of that pattern (scale
+// within [1 / max_scale, max_scale], rotation within max_rotation_rad)
+// that brings the most expected glints near detected ones wins, and each
+// expected glint takes the nearest detection within the gate: a fraction
+// of the smallest distance between two transformed expected glints, so
+// that neighbours are never confused. Glints left over (spurious ones)
+// keep illuminator -1, and so do all when fewer than two expected glints
+// are found (the pattern is then not pinned down).
+struct GlintMatchSettings {
+  double max_scale = 2.0;
+  double max_rotation_rad = 0.35;  // under half the angle between neighbours of a ring of 8
+  double gate_fraction = 0.35;
+};
+void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional<Pixel>>& expected,
+                     const GlintMatchSettings& settings = {});
+
+// Where each light's glint is on `nominal_eye` seen by `camera`, from the
+// specular-path solver; a light without a glint on that eye's cornea gets
+// no place (nullopt) and is never matched.
+std::vector<std::optional<Pixel>> nominal_glint_layout(const Camera& camera,
+                                                       const std::vector<Illuminator>& lights,
+                                                       const Eye& nominal_eye);
 
 }  // namespace purkinje::trackers

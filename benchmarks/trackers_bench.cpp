@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include <map>
+#include <span>
 #include <string>
 
 #include "purkinje/models/scene_file.h"
@@ -16,24 +17,22 @@
 namespace purkinje::trackers {
 namespace {
 
-const cv::Mat& frame(const std::string& name) {
-  static std::map<std::string, cv::Mat> frames;
+const renderer::SensorImage& frame(const std::string& name) {
+  static std::map<std::string, renderer::SensorImage> frames;
   auto it = frames.find(name);
   if (it == frames.end()) {
     const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
     renderer::RenderOptions options;
     options.seed = 1;
-    const renderer::SensorImage s = renderer::render(scene, 0, options).sensor;
-    cv::Mat image(s.height, s.width, CV_8U);
-    for (std::size_t i = 0; i < s.values.size(); ++i) image.data[i] = static_cast<std::uint8_t>(s.values[i]);
-    it = frames.emplace(name, image).first;
+    it = frames.emplace(name, renderer::render(scene, 0, options).sensor).first;
   }
   return it->second;
 }
 
 void glints(benchmark::State& state, const std::string& name) {
-  cv::setNumThreads(1);  // per core
-  const cv::Mat& image = frame(name);
+  cv::setNumThreads(1);  // per core: frames, not their rows, go in parallel
+  const renderer::SensorImage& s = frame(name);
+  const GreyView image = grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
   const BlobGlintDetector detector;
   for (auto _ : state) benchmark::DoNotOptimize(detector.detect(image));
   state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),

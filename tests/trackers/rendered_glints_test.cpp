@@ -7,9 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include <opencv2/core.hpp>
-
 #include <cmath>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -21,21 +20,6 @@
 namespace purkinje::trackers {
 namespace {
 
-cv::Mat to_mat(const renderer::SensorImage& s) {
-  cv::Mat out(s.height, s.width, s.bits <= 8 ? CV_8U : CV_16U);
-  for (int y = 0; y < s.height; ++y) {
-    for (int x = 0; x < s.width; ++x) {
-      const unsigned short v = s.values[static_cast<std::size_t>(y) * s.width + x];
-      if (s.bits <= 8) {
-        out.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(v);
-      } else {
-        out.at<std::uint16_t>(y, x) = v;
-      }
-    }
-  }
-  return out;
-}
-
 void expect_glints_found(const std::string& name) {
   const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
   const BlobGlintDetector detector;
@@ -46,7 +30,9 @@ void expect_glints_found(const std::string& name) {
     options.seed = seed;  // sensor noise differs; the scene does not
     options.edge_samples_per_pixel = 8;
     const renderer::RenderResult r = renderer::render(scene, 0, options);
-    std::vector<Glint> glints = detector.detect(to_mat(r.sensor));
+    std::vector<Glint> glints =
+        detector.detect(grey_view(std::span<const std::uint16_t>(r.sensor.values), r.sensor.width,
+                                  r.sensor.height, r.sensor.bits));
     // Identity from the lights' layout on a nominal eye 2 mm and 10 deg
     // away from the true one, as a tracker knows the eye only roughly.
     const Eye& eye = scene.eyes[0];

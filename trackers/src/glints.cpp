@@ -17,15 +17,25 @@ namespace purkinje::trackers {
 
 namespace {
 
-// The largest value of an image's type: where a sensor saturates.
-double full_scale(const cv::Mat& image) { return image.depth() == CV_8U ? 255.0 : 65535.0; }
-
-void check_image(const cv::Mat& image) {
-  if (image.empty()) throw std::invalid_argument("BlobGlintDetector: the image is empty");
-  if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U)) {
-    throw std::invalid_argument("BlobGlintDetector: image type " + cv::typeToString(image.type()) +
-                                ": must be single-channel 8- or 16-bit (CV_8UC1 or CV_16UC1)");
+// The image as an OpenCV matrix over the same memory, after checking it.
+cv::Mat mat_of(const GreyView& image) {
+  const auto fail = [](const std::string& what) { throw std::invalid_argument("BlobGlintDetector: image " + what); };
+  if (image.data == nullptr || image.width <= 0 || image.height <= 0) {
+    fail("is empty (" + std::to_string(image.width) + " x " + std::to_string(image.height) + ")");
   }
+  if (image.bytes_per_pixel != 1 && image.bytes_per_pixel != 2) {
+    fail("bytes_per_pixel = " + std::to_string(image.bytes_per_pixel) + ": must be 1 or 2 (8- or 16-bit grey)");
+  }
+  if (image.bits < 1 || image.bits > 8 * image.bytes_per_pixel) {
+    fail("bits = " + std::to_string(image.bits) + ": must be in [1, " + std::to_string(8 * image.bytes_per_pixel) +
+         "] for " + std::to_string(image.bytes_per_pixel) + " byte(s) per pixel");
+  }
+  if (image.row_bytes < static_cast<std::size_t>(image.width) * image.bytes_per_pixel) {
+    fail("row_bytes = " + std::to_string(image.row_bytes) + ": must be at least width * bytes_per_pixel = " +
+         std::to_string(image.width * image.bytes_per_pixel));
+  }
+  return cv::Mat(image.height, image.width, image.bytes_per_pixel == 1 ? CV_8U : CV_16U,
+                 const_cast<void*>(image.data), image.row_bytes);
 }
 
 // What a saturated glint's pixels say: its brightness above the
@@ -175,12 +185,12 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
   }
 }
 
-std::vector<Glint> BlobGlintDetector::detect(const cv::Mat& image) const {
-  check_image(image);
+std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
+  const cv::Mat image = mat_of(view);  // read only
   Scratch& scratch = scratch_for(image.size());
   cv::Mat& grey = scratch.grey;
   image.convertTo(grey, CV_32F);
-  const double top = full_scale(image);
+  const double top = std::ldexp(1.0, view.bits) - 1;  // where the sensor saturates
   const int r = settings_.background_radius_px;
   // A square, not a disc: separable, so the opening costs a twentieth
   // (0.12 against 2.3 ms for 640 x 480), and taken in the image's own

@@ -4,14 +4,13 @@
 // coordinates, (0, 0) the top-left pixel's centre, as in every purkinje
 // label and as in OpenCV.
 
-#include <opencv2/core/mat.hpp>
-
 #include <optional>
 #include <vector>
 
 #include "purkinje/models/camera.h"
 #include "purkinje/models/eye.h"
 #include "purkinje/models/illuminator.h"
+#include "purkinje/trackers/image.h"
 
 namespace purkinje::trackers {
 
@@ -30,9 +29,9 @@ struct Glint {
 class GlintDetector {
  public:
   virtual ~GlintDetector() = default;
-  // Glints in a single-channel 8- or 16-bit image, brightest (by energy)
-  // first. Throws std::invalid_argument for any other image.
-  virtual std::vector<Glint> detect(const cv::Mat& image) const = 0;
+  // Glints in an image, brightest (by energy) first. Throws
+  // std::invalid_argument for an image it cannot read, naming the rule.
+  virtual std::vector<Glint> detect(const GreyView& image) const = 0;
 };
 
 // Glints as small bright blobs above the local background: a white
@@ -60,7 +59,7 @@ struct BlobGlintSettings {
 class BlobGlintDetector final : public GlintDetector {
  public:
   explicit BlobGlintDetector(const BlobGlintSettings& settings = {});
-  std::vector<Glint> detect(const cv::Mat& image) const override;
+  std::vector<Glint> detect(const GreyView& image) const override;
 
  private:
   BlobGlintSettings settings_;

@@ -8,6 +8,9 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "purkinje/trackers/glints.h"
@@ -80,6 +83,34 @@ TEST(IdentifyGlints, TwoLightsBesideACameraWithASpuriousGlint) {
   EXPECT_EQ(glints[0].illuminator, -1);
   EXPECT_EQ(glints[1].illuminator, 1);
   EXPECT_EQ(glints[2].illuminator, 0);
+}
+
+// With two lights every pair of detections fits the layout exactly; the
+// pair nearest the layout's own spacing and orientation is the glints.
+TEST(IdentifyGlints, TwoLightsAndASpuriousGlintThatAlsoFitsTheScaleBounds) {
+  const std::vector<std::optional<Pixel>> expected{Pixel{316.6, 239.5}, Pixel{322.4, 239.6}};
+  std::vector<Glint> glints(3);
+  glints[0].centre = {349.0, 230.0};  // spurious: with light 1's glint, a pair 1.8 times the spacing, turned 0.3 rad
+  glints[1].centre = {343.5, 230.2};  // light 1
+  glints[2].centre = {337.2, 230.0};  // light 0
+  identify_glints(glints, expected);
+  EXPECT_EQ(glints[0].illuminator, -1);
+  EXPECT_EQ(glints[1].illuminator, 1);
+  EXPECT_EQ(glints[2].illuminator, 0);
+}
+
+TEST(IdentifyGlints, RejectsSettingsOutOfRangeNamingThem) {
+  std::vector<Glint> glints(2);
+  const std::vector<std::optional<Pixel>> expected{Pixel{0, 0}, Pixel{5, 0}};
+  for (const auto& [settings, name] : std::vector<std::pair<GlintMatchSettings, std::string>>{
+           {{0.9, 0.35, 0.35}, "max_scale"}, {{2, -0.1, 0.35}, "max_rotation_rad"}, {{2, 0.35, 0.5}, "gate_fraction"}}) {
+    try {
+      identify_glints(glints, expected, settings);
+      ADD_FAILURE() << name << " out of range was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(IdentifyGlints, OneGlintOfTwoLightsIsNotPinnedDown) {

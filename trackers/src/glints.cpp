@@ -30,6 +30,11 @@ cv::Mat mat_of(const GreyView& image) {
     fail("bits = " + std::to_string(image.bits) + ": must be in [1, " + std::to_string(8 * image.bytes_per_pixel) +
          "] for " + std::to_string(image.bytes_per_pixel) + " byte(s) per pixel");
   }
+  if (image.row_bytes % image.bytes_per_pixel != 0 ||
+      reinterpret_cast<std::uintptr_t>(image.data) % image.bytes_per_pixel != 0) {
+    fail("row_bytes = " + std::to_string(image.row_bytes) + " or its data's address is not a multiple of " +
+         std::to_string(image.bytes_per_pixel) + " bytes: 16-bit pixels must be aligned");
+  }
   if (image.row_bytes < static_cast<std::size_t>(image.width) * image.bytes_per_pixel) {
     fail("row_bytes = " + std::to_string(image.row_bytes) + ": must be at least width * bytes_per_pixel = " +
          std::to_string(image.width * image.bytes_per_pixel));
@@ -207,7 +212,9 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
   cv::Mat& blobs = scratch.blobs;
   cv::compare(above, threshold, blobs, cv::CMP_GT);
   cv::Mat& labels = scratch.labels;
-  // Zeros again for the next frame, however this one ends.
+  // Zeros again for the next frame, however this one ends (the seeds are
+  // this frame's from here on).
+  scratch.seeds.clear();
   struct ClearLabels {
     Scratch& s;
     ~ClearLabels() {
@@ -255,7 +262,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
     bool saturated = false;
     for (int pass = 0; pass < 3; ++pass) {
       double sum_u = 0, sum_v = 0;
-      sum = 0;
+      sum = 0, peak = 0, saturated = false;
       for (int y = 0; y < window.height; ++y) {
         for (int x = 0; x < window.width; ++x) {
           const int u = window.x + x, v = window.y + y;
@@ -317,6 +324,14 @@ std::complex<double> complex_of(const Pixel& p) { return {p.u, p.v}; }
 
 void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional<Pixel>>& expected,
                      const GlintMatchSettings& s) {
+  const auto fail = [](const std::string& what) { throw std::invalid_argument("GlintMatchSettings: " + what); };
+  if (!(s.max_scale >= 1)) fail("max_scale = " + std::to_string(s.max_scale) + ": must be >= 1");
+  if (!(s.max_rotation_rad >= 0 && s.max_rotation_rad <= std::numbers::pi)) {
+    fail("max_rotation_rad = " + std::to_string(s.max_rotation_rad) + ": must be in [0, pi]");
+  }
+  if (!(s.gate_fraction > 0 && s.gate_fraction < 0.5)) {
+    fail("gate_fraction = " + std::to_string(s.gate_fraction) + ": must be in (0, 0.5)");
+  }
   for (Glint& g : glints) g.illuminator = -1;
   std::vector<int> lights;
   std::vector<std::complex<double>> places;
@@ -354,7 +369,7 @@ void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional
   };
   Similarity best;
   int best_count = 0;
-  double best_residual = INFINITY;
+  double best_cost = INFINITY;
   for (std::size_t a = 0; a < candidates; ++a) {
     for (std::size_t b = 0; b < candidates; ++b) {
       if (a == b) continue;
@@ -368,12 +383,17 @@ void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional
             continue;
           }
           m.t = found[a] - m.q * places[i];
+          const double gate = s.gate_fraction * spacing * scale;
           double residual = 0;
-          const int count = score(m, s.gate_fraction * spacing * scale, residual);
-          if (count > best_count || (count == best_count && residual < best_residual)) {
+          const int count = score(m, gate, residual);
+          // Among equal counts: glints near their places, then the least
+          // change of scale and turn (each measured against its bound).
+          const double cost = residual / (gate * gate * count) + std::abs(std::log(scale)) / std::log(s.max_scale + 1e-12) +
+                              std::abs(std::arg(m.q)) / (s.max_rotation_rad + 1e-12);
+          if (count > best_count || (count == best_count && cost < best_cost)) {
             best = m;
             best_count = count;
-            best_residual = residual;
+            best_cost = cost;
           }
         }
       }

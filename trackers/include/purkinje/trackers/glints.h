@@ -35,7 +35,7 @@ class GlintDetector {
 };
 
 // Glints as small bright blobs above the local background: a white
-// top-hat (the image minus its opening by a disc larger than any glint)
+// top-hat (the image minus its opening by a square wider than any glint)
 // leaves what is small and bright; blobs above a threshold that stand out
 // from all around them are glints, and each one's centre is the centroid
 // of its top-hat brightness (less the level around it) over a disc about
@@ -46,7 +46,7 @@ class GlintDetector {
 // pixel-integrated Gaussian to its unclipped flanks above the background
 // (a clipped pixel only bounds it from below).
 struct BlobGlintSettings {
-  int background_radius_px = 6;   // the opening's disc: glints are narrower than its diameter
+  int background_radius_px = 6;   // the opening's square is 2r + 1 wide: glints are narrower
   // Blobs are what stands above the local background by more than both:
   double threshold = 0.12;        // this fraction of the image's full scale,
   double relative_threshold = 0.25;  // and this fraction of the brightest blob's peak (iris texture is
@@ -75,11 +75,17 @@ class BlobGlintDetector final : public GlintDetector {
 // of the smallest distance between two transformed expected glints, so
 // that neighbours are never confused. Glints left over (spurious ones)
 // keep illuminator -1, and so do all when fewer than two expected glints
-// are found (the pattern is then not pinned down).
+// are found (the pattern is then not pinned down) or two lights share a
+// place. Among transforms that bring as many, the one whose glints sit
+// closest, scaled and turned least, wins: with two lights every pair of
+// detections fits exactly, and only that prior tells them apart. Only the
+// 2n + 4 brightest detections of n lights are tried (detect() orders them
+// so); the search costs (2n + 4)^2 n^3 distance checks, 3.4 million for
+// n = 8. Throws std::invalid_argument for settings out of range.
 struct GlintMatchSettings {
-  double max_scale = 2.0;
-  double max_rotation_rad = 0.35;  // under half the angle between neighbours of a ring of 8
-  double gate_fraction = 0.35;
+  double max_scale = 2.0;          // >= 1
+  double max_rotation_rad = 0.35;  // in [0, pi]; under half the angle between neighbours of a ring of 8
+  double gate_fraction = 0.35;     // in (0, 0.5): below half, no detection is near two expected glints
 };
 void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional<Pixel>>& expected,
                      const GlintMatchSettings& settings = {});

@@ -15,15 +15,15 @@ struct GreyView {
   int width = 0, height = 0;
   std::size_t row_bytes = 0;
   int bytes_per_pixel = 1;  // 1, or 2 (native byte order)
-  int bits = 8;             // values lie in [0, 2^bits - 1]; the top one is saturation
+  // Values lie in [0, 2^bits - 1], the top one being saturation; larger
+  // ones count as saturated too. Data kept in a word's high bits (as in a
+  // 12-bit PNG) must be shifted down first.
+  int bits = 8;
 };
 
-// Contiguous rows of 8-bit or 16-bit pixels.
-inline GreyView grey_view(std::span<const std::uint8_t> pixels, int width, int height) {
-  return {pixels.data(), width, height, static_cast<std::size_t>(width), 1, 8};
-}
-inline GreyView grey_view(std::span<const std::uint16_t> pixels, int width, int height, int bits = 16) {
-  return {pixels.data(), width, height, static_cast<std::size_t>(width) * 2, 2, bits};
-}
+// Contiguous rows of 8-bit or 16-bit pixels. Throws std::invalid_argument
+// when the pixels are fewer than width x height.
+GreyView grey_view(std::span<const std::uint8_t> pixels, int width, int height);
+GreyView grey_view(std::span<const std::uint16_t> pixels, int width, int height, int bits = 16);
 
 }  // namespace purkinje::trackers

@@ -1,5 +1,5 @@
 #pragma once
 namespace purkinje::trackers {
-// The trackers component; detectors arrive with the trackers issue.
+// The trackers component: detectors (glints.h), image views (image.h).
 const char* component_name();
 }  // namespace purkinje::trackers

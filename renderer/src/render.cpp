@@ -87,7 +87,7 @@ constexpr double kGatherMinBranch = 1e-2;
 // edge rays, which there still leave the most error per pixel; outlines
 // and weaker bends get half of them, and the iris's texture a third: its
 // error is the iris caches' interpolation more than its sampling
-// (headset, iris pixels: 1.9% of the iris's mean at 4 rays, 1.6% at 24).
+// (headset, iris pixels: 1.9% of the iris's mean at 4 rays, 1.4% at 24).
 constexpr double kEdgeContrast = 0.02;
 constexpr double kStrongEdgeContrast = 0.5;
 

@@ -275,7 +275,7 @@ class FastIntegrator final : public PathIntegrator {
     PrimaryRecord* record;
     Pixel image_position;
     std::uint64_t path;
-      double reflection_weight = 1;  // of the branches the cornea reflects off this chain
+    double reflection_weight = 1;  // of the branches the cornea reflects off this chain
   };
 
   // Radiance arriving along `ray`, times `weight`, added to `out`.
@@ -895,6 +895,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     const std::uint64_t pixel = static_cast<std::uint64_t>(y) * width + x;
     const double shift_u = uniform01(options.seed, kJitterStream, 2 * pixel);
     const double shift_v = uniform01(options.seed, kJitterStream, 2 * pixel + 1);
+    const UnitVector3 centre_ray = camera.back_project({double(x), double(y)});  // for the vignetting
     Contribution sum;
     std::array<int, kClasses> counts{};
     std::array<PrimaryRecord, kClasses> first_of_class{};
@@ -908,7 +909,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       counts[static_cast<int>(r.pixel_class)] = 1;
       cornea_hits = cornea.at(x, y) > 0 ? 1 : 0;
       sum.radiance = result.radiance.at(x, y);
-      sum.electrons = diffuse_electrons.at(x, y) / vignetting_at(camera.back_project({double(x), double(y)}));
+      sum.electrons = diffuse_electrons.at(x, y) / vignetting_at(centre_ray);
     }
     // With the centre sample kept, the first new sample traces the cornea's
     // reflection for all the new ones, and the others none: the
@@ -939,8 +940,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       }
     }
     const int majority = static_cast<int>(std::max_element(counts.begin(), counts.end()) - counts.begin());
-    store_pixel(x, y, sum, samples, camera.back_project({double(x), double(y)}), first_of_class[majority], counts,
-                cornea_hits);
+    store_pixel(x, y, sum, samples, centre_ray, first_of_class[majority], counts, cornea_hits);
   };
 
   // Rows y0 <= y < y1 in parallel, reporting progress from `progress_from`

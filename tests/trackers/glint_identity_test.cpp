@@ -73,10 +73,13 @@ TEST(IdentifyGlints, ARingMovedScaledAndTurnedWithMissingAndSpuriousGlints) {
   }
 }
 
-TEST(IdentifyGlints, TwoLightsBesideACameraWithASpuriousGlint) {
+// Two lights beside a camera, their two glints and a spurious one. With
+// two lights every pair of detections fits the layout exactly; the pair
+// nearest the layout's own spacing and orientation is the glints.
+void expect_two_lights_told_from(const Pixel& spurious) {
   const std::vector<std::optional<Pixel>> expected{Pixel{316.6, 239.5}, Pixel{322.4, 239.6}};
   std::vector<Glint> glints(3);
-  glints[0].centre = {360.1, 228.0};  // spurious, brightest
+  glints[0].centre = spurious;        // the brightest
   glints[1].centre = {343.5, 230.2};  // light 1
   glints[2].centre = {337.2, 230.0};  // light 0
   identify_glints(glints, expected);
@@ -85,18 +88,12 @@ TEST(IdentifyGlints, TwoLightsBesideACameraWithASpuriousGlint) {
   EXPECT_EQ(glints[2].illuminator, 0);
 }
 
-// With two lights every pair of detections fits the layout exactly; the
-// pair nearest the layout's own spacing and orientation is the glints.
+TEST(IdentifyGlints, TwoLightsBesideACameraWithASpuriousGlint) {
+  expect_two_lights_told_from({360.1, 228.0});  // with light 1's glint, a pair beyond the scale bound
+}
+
 TEST(IdentifyGlints, TwoLightsAndASpuriousGlintThatAlsoFitsTheScaleBounds) {
-  const std::vector<std::optional<Pixel>> expected{Pixel{316.6, 239.5}, Pixel{322.4, 239.6}};
-  std::vector<Glint> glints(3);
-  glints[0].centre = {349.0, 230.0};  // spurious: with light 1's glint, a pair 1.8 times the spacing, turned 0.3 rad
-  glints[1].centre = {343.5, 230.2};  // light 1
-  glints[2].centre = {337.2, 230.0};  // light 0
-  identify_glints(glints, expected);
-  EXPECT_EQ(glints[0].illuminator, -1);
-  EXPECT_EQ(glints[1].illuminator, 1);
-  EXPECT_EQ(glints[2].illuminator, 0);
+  expect_two_lights_told_from({349.0, 230.0});  // with light 1's glint, 1.8 times the spacing, turned 0.3 rad
 }
 
 TEST(IdentifyGlints, RejectsSettingsOutOfRangeNamingThem) {

@@ -243,8 +243,8 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
     cv::dilate(blob, surroundings, disc);
     surroundings &= ~weighed & ~blobs(window);  // other glints nearby are not the background
     // A glint stands out from all around it: a small bright part of a
-    // larger bright region (the corner of a bright patch, which the
-    // opening's disc cannot reach into) does not.
+    // larger bright region (the rim of a bright patch, which the opening's
+    // square cannot reach into) does not.
     double around_max = 0;
     cv::minMaxLoc(grey(window), nullptr, &around_max, nullptr, nullptr, surroundings);
     double blob_max = 0;
@@ -259,6 +259,12 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
     // evenly, and other blobs are left out.
     const double radius = std::sqrt(area / std::numbers::pi) + m + 0.5;
     Pixel centre{box.x + 0.5 * (box.width - 1), box.y + 0.5 * (box.height - 1)};
+    // The window's pixels within `within` of the centre that belong to no
+    // other blob: what the centroid and the fit weigh.
+    const auto weighs = [&](int u, int v, double within) {
+      const int other = labels.at<int>(v, u);
+      return std::hypot(u - centre.u, v - centre.v) <= within && (other == 0 || other == label);
+    };
     double sum = 0, peak = 0;
     bool saturated = false;
     for (int pass = 0; pass < 3; ++pass) {
@@ -267,9 +273,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
       for (int y = 0; y < window.height; ++y) {
         for (int x = 0; x < window.width; ++x) {
           const int u = window.x + x, v = window.y + y;
-          if (std::hypot(u - centre.u, v - centre.v) > radius) continue;
-          const int other = labels.at<int>(v, u);
-          if (other != 0 && other != label) continue;
+          if (!weighs(u, v, radius)) continue;
           const double w = std::max(0.0, above.at<float>(v, u) - pedestal);
           sum += w;
           sum_u += w * u;
@@ -291,9 +295,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
       for (int y = 0; y < window.height; ++y) {
         for (int x = 0; x < window.width; ++x) {
           const int u = window.x + x, v = window.y + y;
-          if (std::hypot(u - centre.u, v - centre.v) > radius + 1) continue;
-          const int other = labels.at<int>(v, u);
-          if (other != 0 && other != label) continue;
+          if (!weighs(u, v, radius + 1)) continue;
           pixels.push_back({u, v, above.at<float>(v, u) - pedestal, grey.at<float>(v, u) >= top});
         }
       }

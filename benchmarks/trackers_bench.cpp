@@ -9,10 +9,12 @@
 #include <map>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
 #include "purkinje/trackers/glints.h"
+#include "purkinje/trackers/pupil.h"
 
 namespace purkinje::trackers {
 namespace {
@@ -39,10 +41,42 @@ void glints(benchmark::State& state, const std::string& name) {
                                                       benchmark::Counter::kIsRate);
 }
 
+// The pupil alone, told the frame's glints.
+void pupil(benchmark::State& state, const std::string& name) {
+  cv::setNumThreads(1);
+  const renderer::SensorImage& s = frame(name);
+  const GreyView image = grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
+  const std::vector<Glint> found = BlobGlintDetector().detect(image);
+  const StarburstPupilDetector detector;
+  for (auto _ : state) benchmark::DoNotOptimize(detector.detect(image, found));
+  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                      benchmark::Counter::kIsRate);
+}
+
+// A whole frame: glints, then the pupil with the glints masked (the bar).
+void frame_tracked(benchmark::State& state, const std::string& name) {
+  cv::setNumThreads(1);
+  const renderer::SensorImage& s = frame(name);
+  const GreyView image = grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
+  const BlobGlintDetector glint_detector;
+  const StarburstPupilDetector pupil_detector;
+  for (auto _ : state) benchmark::DoNotOptimize(pupil_detector.detect(image, glint_detector.detect(image)));
+  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                      benchmark::Counter::kIsRate);
+}
+
 void BM_GlintDetectorRemote(benchmark::State& s) { glints(s, "remote"); }
 void BM_GlintDetectorHeadset(benchmark::State& s) { glints(s, "headset"); }
 BENCHMARK(BM_GlintDetectorRemote)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GlintDetectorHeadset)->Unit(benchmark::kMillisecond);
+void BM_PupilDetectorRemote(benchmark::State& s) { pupil(s, "remote"); }
+void BM_PupilDetectorHeadset(benchmark::State& s) { pupil(s, "headset"); }
+BENCHMARK(BM_PupilDetectorRemote)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PupilDetectorHeadset)->Unit(benchmark::kMillisecond);
+void BM_TrackersRemote(benchmark::State& s) { frame_tracked(s, "remote"); }
+void BM_TrackersHeadset(benchmark::State& s) { frame_tracked(s, "headset"); }
+BENCHMARK(BM_TrackersRemote)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TrackersHeadset)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace purkinje::trackers

@@ -28,12 +28,12 @@
 #include <iostream>
 #include <limits>
 #include <numbers>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "purkinje/models/eye_variation.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
 #include "threshold_pupil_detector.h"
@@ -65,55 +65,25 @@ int renders_per_scene() {
 
 // ------------------------------------------------------------ random renders
 
-struct Variant {
+// The scene's eye turned and its pupil resized (eye_variation.h): the
+// gaze uniform over the cap within 30 deg of the scene's, the pupil radius
+// uniform in [1, 4] mm.
+struct Variant : EyeVariation {
   int index = 0;
-  double gaze_turn_rad = 0;       // angle between the scene's gaze and this render's
-  double turn_direction_rad = 0;  // 0: toward the head's up, pi/2: toward up x gaze (world +x in both scenes)
-  double pupil_radius_mm = 0;
 };
 
-// Uniform in [0, 1) from 53 bits of the generator: the same numbers with
-// any standard library (std::uniform_real_distribution is not specified).
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
-
 std::vector<Variant> variants(std::uint64_t seed, int count) {
-  std::mt19937_64 rng(seed);
   std::vector<Variant> out;
-  for (int i = 0; i < count; ++i) {
+  for (const EyeVariation& e : random_eye_variations(seed, count, {kMaxGazeTurnRad, 1, 4})) {
     Variant v;
-    v.index = i;
-    // Uniform over the spherical cap: cos(turn) uniform in [cos 30 deg, 1].
-    v.gaze_turn_rad = std::acos(1 - uniform01(rng) * (1 - std::cos(kMaxGazeTurnRad)));
-    v.turn_direction_rad = 2 * std::numbers::pi * uniform01(rng);
-    v.pupil_radius_mm = 1 + 3 * uniform01(rng);
+    static_cast<EyeVariation&>(v) = e;
+    v.index = static_cast<int>(out.size());
     out.push_back(v);
   }
   return out;
 }
 
-// The scene with its (first) eye turned about its centre of rotation, a
-// rigid turn about an axis perpendicular to the gaze (Listing's law with the
-// scene's gaze as primary position), and the pupil resized.
-Scene with_variant(const Scene& scene, const Variant& v) {
-  const Eye& eye = scene.eyes.at(0);
-  const UnitVector3 gaze = eye.visual_axis();
-  const UnitVector3 up = UnitVector3::normalize(eye.appearance().head_up.vector() -
-                                                gaze.vector() * dot(eye.appearance().head_up, gaze));
-  const UnitVector3 side = UnitVector3::normalize(cross(up, gaze));
-  const UnitVector3 toward = UnitVector3::normalize(up * std::cos(v.turn_direction_rad) +
-                                                    side * std::sin(v.turn_direction_rad));
-  // Turning by t about gaze x toward carries the gaze toward `toward`.
-  const Rotation turn = Rotation::from_axis_angle(UnitVector3::normalize(cross(gaze, toward)), v.gaze_turn_rad);
-  const Vector3 center = eye.rotation_center().from_origin();
-  const Pose about_rotation_center(turn, center - turn * center);
-  EyeModel model = eye.model();
-  model.pupil_radius_mm = v.pupil_radius_mm;
-  Eye turned(model, about_rotation_center * eye.world_from_eye());
-  turned.set_appearance(eye.appearance());
-  Scene out = scene;
-  out.eyes = {turned};
-  return out;
-}
+Scene with_variant(const Scene& scene, const Variant& v) { return with_eye_variation(scene, v); }
 
 // The eye region a tracker would crop around the eye before looking for the
 // pupil: the box around the limbus's image, with a margin for the cornea's

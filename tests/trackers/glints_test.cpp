@@ -13,16 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "cv_view.h"
 #include "purkinje/trackers/glints.h"
 
 namespace purkinje::trackers {
 namespace {
-
-// The detectors read plain memory; these tests draw with OpenCV.
-GreyView view(const cv::Mat& image) {
-  return {image.data, image.cols, image.rows, image.step[0], static_cast<int>(image.elemSize()),
-          image.depth() == CV_8U ? 8 : 16};
-}
 
 struct Spot {
   double u, v;         // centre

@@ -13,36 +13,11 @@
 
 #include "purkinje/models/optimizer.h"
 #include "purkinje/models/specular.h"
+#include "grey_mat.h"
 
 namespace purkinje::trackers {
 
 namespace {
-
-// The image as an OpenCV matrix over the same memory, after checking it.
-cv::Mat mat_of(const GreyView& image) {
-  const auto fail = [](const std::string& what) { throw std::invalid_argument("BlobGlintDetector: image " + what); };
-  if (image.data == nullptr || image.width <= 0 || image.height <= 0) {
-    fail("is empty (" + std::to_string(image.width) + " x " + std::to_string(image.height) + ")");
-  }
-  if (image.bytes_per_pixel != 1 && image.bytes_per_pixel != 2) {
-    fail("bytes_per_pixel = " + std::to_string(image.bytes_per_pixel) + ": must be 1 or 2 (8- or 16-bit grey)");
-  }
-  if (image.bits < 1 || image.bits > 8 * image.bytes_per_pixel) {
-    fail("bits = " + std::to_string(image.bits) + ": must be in [1, " + std::to_string(8 * image.bytes_per_pixel) +
-         "] for " + std::to_string(image.bytes_per_pixel) + " byte(s) per pixel");
-  }
-  if (image.row_bytes % image.bytes_per_pixel != 0 ||
-      reinterpret_cast<std::uintptr_t>(image.data) % image.bytes_per_pixel != 0) {
-    fail("row_bytes = " + std::to_string(image.row_bytes) + " or its data's address is not a multiple of " +
-         std::to_string(image.bytes_per_pixel) + " bytes: 16-bit pixels must be aligned");
-  }
-  if (image.row_bytes < static_cast<std::size_t>(image.width) * image.bytes_per_pixel) {
-    fail("row_bytes = " + std::to_string(image.row_bytes) + ": must be at least width * bytes_per_pixel = " +
-         std::to_string(image.width * image.bytes_per_pixel));
-  }
-  return cv::Mat(image.height, image.width, image.bytes_per_pixel == 1 ? CV_8U : CV_16U,
-                 const_cast<void*>(image.data), image.row_bytes);
-}
 
 // What a saturated glint's pixels say: its brightness above the
 // background where unclipped, and where clipped only that it is at least
@@ -192,7 +167,7 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
 }
 
 std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
-  const cv::Mat image = mat_of(view);  // read only
+  const cv::Mat image = mat_of(view, "BlobGlintDetector");  // read only
   Scratch& scratch = scratch_for(image.size());
   cv::Mat& grey = scratch.grey;
   image.convertTo(grey, CV_32F);

@@ -1,0 +1,89 @@
+// Eyes turned and pupils resized about a scene's own (the sweeps behind the
+// bars): checked against the geometry they promise, not against their own
+// draws.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "purkinje/models/eye_variation.h"
+#include "purkinje/models/scene_file.h"
+
+namespace purkinje {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180;
+
+Scene bundled(const std::string& name) {
+  return load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
+}
+
+TEST(EyeVariation, TurnsTheGazeByTheAngleTowardTheDirectionAboutTheRotationCentre) {
+  const Scene scene = bundled("remote");
+  const Eye& eye = scene.eyes[0];
+  const UnitVector3 gaze = eye.visual_axis();
+  const UnitVector3 up = UnitVector3::normalize(eye.appearance().head_up.vector() -
+                                                gaze.vector() * dot(eye.appearance().head_up, gaze));
+  for (const double direction : {0.0, 90 * kDeg, 200 * kDeg}) {
+    const Scene turned = with_eye_variation(scene, {20 * kDeg, direction, 2.5});
+    const Eye& t = turned.eyes[0];
+    EXPECT_NEAR(angle_between(t.visual_axis(), gaze), 20 * kDeg, 1e-12) << direction;
+    // The new gaze leans toward `direction` in the plane across the old
+    // gaze: along up by cos(direction) sin(20 deg), along up x gaze by
+    // sin(direction) sin(20 deg).
+    const UnitVector3 side = UnitVector3::normalize(cross(up, gaze));
+    EXPECT_NEAR(dot(t.visual_axis(), up), std::cos(direction) * std::sin(20 * kDeg), 1e-12) << direction;
+    EXPECT_NEAR(dot(t.visual_axis(), side), std::sin(direction) * std::sin(20 * kDeg), 1e-12) << direction;
+    EXPECT_NEAR(distance(t.rotation_center(), eye.rotation_center()), 0, 1e-9) << direction;
+    EXPECT_DOUBLE_EQ(t.model().pupil_radius_mm, 2.5);
+    EXPECT_EQ(turned.cameras.size(), scene.cameras.size());
+    EXPECT_EQ(turned.illuminators.size(), scene.illuminators.size());
+  }
+  EXPECT_THROW(with_eye_variation(scene, {}, 1), std::out_of_range);
+}
+
+TEST(EyeVariation, DrawsGazeUniformlyOverTheCapAndPupilsWithinTheRange) {
+  const EyeVariationRange range{25 * kDeg, 1.5, 3.5};
+  const auto draws = random_eye_variations(42, 4000, range);
+  ASSERT_EQ(draws.size(), 4000u);
+  double mean_one_minus_cos = 0, mean_pupil = 0, mean_cos_direction = 0;
+  for (const EyeVariation& v : draws) {
+    ASSERT_GE(v.gaze_turn_rad, 0);
+    ASSERT_LE(v.gaze_turn_rad, range.max_gaze_turn_rad);
+    ASSERT_GE(v.pupil_radius_mm, 1.5);
+    ASSERT_LT(v.pupil_radius_mm, 3.5);
+    mean_one_minus_cos += (1 - std::cos(v.gaze_turn_rad)) / draws.size();
+    mean_pupil += v.pupil_radius_mm / draws.size();
+    mean_cos_direction += std::cos(v.turn_direction_rad) / draws.size();
+  }
+  // Uniform over the cap: 1 - cos(turn) uniform in [0, 1 - cos 25 deg].
+  // Standard errors: 0.0007, 0.009 and 0.011; bounds at 4 of them.
+  EXPECT_NEAR(mean_one_minus_cos, (1 - std::cos(25 * kDeg)) / 2, 0.003);
+  EXPECT_NEAR(mean_pupil, 2.5, 0.04);
+  EXPECT_NEAR(mean_cos_direction, 0, 0.045);
+  // Reproducible from the seed, and a different seed draws differently.
+  EXPECT_EQ(random_eye_variations(42, 1, range)[0].gaze_turn_rad, draws[0].gaze_turn_rad);
+  EXPECT_NE(random_eye_variations(43, 1, range)[0].gaze_turn_rad, draws[0].gaze_turn_rad);
+}
+
+TEST(EyeVariation, RejectsRangesOutOfBoundsNamingTheField) {
+  const auto rejects = [](const EyeVariationRange& r, int count, const std::string& field) {
+    try {
+      random_eye_variations(1, count, r);
+      ADD_FAILURE() << field << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  rejects({100 * kDeg, 1, 4}, 1, "max_gaze_turn_rad");
+  rejects({-1 * kDeg, 1, 4}, 1, "max_gaze_turn_rad");
+  rejects({30 * kDeg, 0, 4}, 1, "min_pupil_radius_mm");
+  rejects({30 * kDeg, 4, 1}, 1, "max_pupil_radius_mm");
+  rejects({}, -1, "count");
+}
+
+}  // namespace
+}  // namespace purkinje

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "purkinje/models/scene.h"
 #include "purkinje/models/truth.h"
@@ -22,6 +23,23 @@ std::string truth_to_json(const Scene& scene, const SceneTruth& truth);
 // straight), pupil ellipse, cornea centre and rotation centre, per
 // (camera, eye); a header row first.
 std::string truth_to_csv(const Scene& scene, const SceneTruth& truth);
+
+// One rendered image's labels file, as `purkinje render` writes it beside
+// the image (docs/labels.md), read back for scoring detectors.
+struct ImageLabels {
+  std::filesystem::path image;  // the image file, in the labels file's folder
+  int width_px = 0, height_px = 0;
+  int bits = 8;  // the sensor's significant bits (a PNG of more than 8 keeps them in its words' high bits)
+  // The views of this image's camera. Only the image-plane fields are
+  // read: each glint's illuminator, status and pixel; the pupil's ellipse,
+  // each border point's status and the refracted centre's status and
+  // pixel; the 3D paths are left empty.
+  std::vector<EyeInCameraTruth> views;
+};
+
+// Throws std::runtime_error naming the file, the key, its value and the
+// rule when the file cannot be read or is not a labels file of this format.
+ImageLabels read_image_labels(const std::filesystem::path& file);
 
 // Writes `contents` to a temporary file in the same directory, flushes it
 // to disk and renames it over `file`, so readers see the old file or the

@@ -1,0 +1,163 @@
+// Reading one rendered image's labels back (for scoring): the image-plane
+// fields only, each checked, every error naming the file, key and value.
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "purkinje/models/labels.h"
+
+namespace purkinje {
+namespace {
+
+using json = nlohmann::json;
+
+class Reader {
+ public:
+  explicit Reader(std::filesystem::path file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& key, const json* value, const std::string& rule) const {
+    std::string text = file_.string() + ": " + key;
+    if (value) {
+      std::string shown = value->dump();
+      if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
+      text += " = " + shown;
+    }
+    throw std::runtime_error(text + ": " + rule);
+  }
+
+  const json& member(const json& object, const std::string& path, const char* key) const {
+    const auto it = object.find(key);
+    if (it == object.end()) fail(path + "." + key, nullptr, "missing");
+    return *it;
+  }
+  const json& array(const json& object, const std::string& path, const char* key) const {
+    const json& v = member(object, path, key);
+    if (!v.is_array()) fail(path + "." + key, &v, "must be an array");
+    return v;
+  }
+  const json& object(const json& parent, const std::string& path, const char* key) const {
+    const json& v = member(parent, path, key);
+    if (!v.is_object()) fail(path + "." + key, &v, "must be an object");
+    return v;
+  }
+  double number(const json& object, const std::string& path, const char* key) const {
+    const json& v = member(object, path, key);
+    if (!v.is_number() || !std::isfinite(v.get<double>())) fail(path + "." + key, &v, "must be a finite number");
+    return v.get<double>();
+  }
+  int integer(const json& object, const std::string& path, const char* key, int lo, int hi) const {
+    const json& v = member(object, path, key);
+    if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi) {
+      fail(path + "." + key, &v, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+    return static_cast<int>(v.get<long long>());
+  }
+  PathStatus status(const json& object, const std::string& path) const {
+    const json& v = member(object, path, "status");
+    if (v.is_string()) {
+      for (int s = 0; s <= static_cast<int>(PathStatus::invalid_input); ++s) {
+        if (v.get<std::string>() == to_string(static_cast<PathStatus>(s))) return static_cast<PathStatus>(s);
+      }
+    }
+    fail(path + ".status", &v, "must be a path status (docs/labels.md)");
+  }
+  // A pixel's u_px and v_px: numbers, or both null (no pixel).
+  Pixel pixel(const json& object, const std::string& path) const {
+    if (member(object, path, "u_px").is_null() && member(object, path, "v_px").is_null()) return {};
+    return {number(object, path, "u_px"), number(object, path, "v_px")};
+  }
+
+ private:
+  std::filesystem::path file_;
+};
+
+}  // namespace
+
+ImageLabels read_image_labels(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(file.string() + ": cannot be read");
+  json root;
+  try {
+    root = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw std::runtime_error(file.string() + ": not JSON: " + e.what());
+  }
+  const Reader r(file);
+  if (!root.is_object()) r.fail("(top level)", nullptr, "must be an object");
+  const int format = r.integer(root, "", "labels_format", 0, 1000000);
+  if (format != kLabelsFormatVersion) {
+    r.fail("labels_format", &root["labels_format"], "must be " + std::to_string(kLabelsFormatVersion));
+  }
+  const json& render = r.object(root, "", "render");
+  ImageLabels labels;
+  const json& files = r.object(render, "render", "files");
+  const json& image = r.member(files, "render.files", "image");
+  if (!image.is_string() || image.get<std::string>().empty()) {
+    r.fail("render.files.image", &image, "must be a file name");
+  }
+  labels.image = file.parent_path() / image.get<std::string>();
+  labels.bits = r.integer(r.object(render, "render", "sensor"), "render.sensor", "bits", 1, 16);
+  const int camera = r.integer(render, "render", "camera", 0, 1000000);
+  const json& cameras = r.array(root, "", "cameras");
+  if (camera >= static_cast<int>(cameras.size())) r.fail("render.camera", &render["camera"], "names no camera");
+  const std::string camera_path = "cameras[" + std::to_string(camera) + "]";
+  labels.width_px = r.integer(cameras[camera], camera_path, "width_px", 1, 1 << 20);
+  labels.height_px = r.integer(cameras[camera], camera_path, "height_px", 1, 1 << 20);
+  const int lights = static_cast<int>(r.array(root, "", "illuminators").size());
+
+  const json& views = r.array(root, "", "views");
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const std::string path = "views[" + std::to_string(i) + "]";
+    const json& v = views[i];
+    if (!v.is_object()) r.fail(path, &v, "must be an object");
+    EyeInCameraTruth view;
+    view.camera = r.integer(v, path, "camera", 0, 1000000);
+    if (view.camera != camera) continue;  // another camera's
+    view.eye = r.integer(v, path, "eye", 0, 1000000);
+    const json& glints = r.array(v, path, "glints");
+    for (std::size_t g = 0; g < glints.size(); ++g) {
+      const std::string glint_path = path + ".glints[" + std::to_string(g) + "]";
+      GlintTruth truth;
+      truth.illuminator = r.integer(glints[g], glint_path, "illuminator", 0, lights - 1);
+      truth.status = r.status(glints[g], glint_path);
+      truth.pixel = r.pixel(glints[g], glint_path);
+      view.glints.push_back(truth);
+    }
+    const std::string pupil_path = path + ".pupil";
+    const json& pupil = r.object(v, path, "pupil");
+    const json& border = r.array(pupil, pupil_path, "border");
+    for (std::size_t b = 0; b < border.size(); ++b) {
+      const std::string point_path = pupil_path + ".border[" + std::to_string(b) + "]";
+      PupilBorderPointTruth point;
+      point.angle_rad = r.number(border[b], point_path, "angle_deg") * std::numbers::pi / 180;
+      point.status = r.status(border[b], point_path);
+      point.pixel = r.pixel(border[b], point_path);
+      view.pupil.border.push_back(point);
+    }
+    const json& ellipse = r.member(pupil, pupil_path, "ellipse");
+    if (!ellipse.is_null()) {
+      const std::string e = pupil_path + ".ellipse";
+      if (!ellipse.is_object()) r.fail(e, &ellipse, "must be an object or null");
+      view.pupil.ellipse_valid = true;
+      view.pupil.ellipse.center = {r.number(ellipse, e, "center_u_px"), r.number(ellipse, e, "center_v_px")};
+      view.pupil.ellipse.semi_axis_1_px = r.number(ellipse, e, "semi_axis_1_px");
+      view.pupil.ellipse.semi_axis_2_px = r.number(ellipse, e, "semi_axis_2_px");
+      view.pupil.ellipse.angle_rad = r.number(ellipse, e, "angle_deg") * std::numbers::pi / 180;
+      if (!(view.pupil.ellipse.semi_axis_1_px > 0 && view.pupil.ellipse.semi_axis_2_px > 0)) {
+        r.fail(e + ".semi_axis_1_px", &ellipse["semi_axis_1_px"], "semi-axes must be positive");
+      }
+    }
+    const json& centre = r.object(pupil, pupil_path, "refracted_center");
+    view.pupil.refracted_center_status = r.status(centre, pupil_path + ".refracted_center");
+    view.pupil.refracted_center = r.pixel(centre, pupil_path + ".refracted_center");
+    labels.views.push_back(std::move(view));
+  }
+  return labels;
+}
+
+}  // namespace purkinje

@@ -1,0 +1,106 @@
+// Reading a rendered image's labels back: the labels of a bundled scene
+// (as truth_to_json writes them, with the render block `purkinje render`
+// adds) read into the same image-plane values; malformed files name the
+// file, key and rule.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "purkinje/models/labels.h"
+#include "purkinje/models/scene_file.h"
+
+namespace purkinje {
+namespace {
+
+nlohmann::json rendered_labels(const Scene& scene, const SceneTruth& truth) {
+  nlohmann::json j = nlohmann::json::parse(truth_to_json(scene, truth));
+  j["render"] = {{"camera", 0}, {"files", {{"image", "eye.png"}}}, {"sensor", {{"bits", 10}}}};
+  return j;
+}
+
+std::filesystem::path write(const nlohmann::json& j, const std::string& name) {
+  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / name;
+  std::ofstream(file) << j.dump();
+  return file;
+}
+
+TEST(ImageLabels, ReadsBackTheImagePlaneValues) {
+  const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/headset.json");
+  const SceneTruth truth = compute_truth(scene);
+  const std::filesystem::path file = write(rendered_labels(scene, truth), "image_labels_headset.json");
+  const ImageLabels labels = read_image_labels(file);
+  EXPECT_EQ(labels.image, file.parent_path() / "eye.png");
+  EXPECT_EQ(labels.bits, 10);
+  EXPECT_EQ(labels.width_px, scene.cameras[0].intrinsics().width);
+  EXPECT_EQ(labels.height_px, scene.cameras[0].intrinsics().height);
+  ASSERT_EQ(labels.views.size(), 1u);
+  const EyeInCameraTruth& read = labels.views[0];
+  const EyeInCameraTruth& written = truth.views[0];
+  ASSERT_EQ(read.glints.size(), written.glints.size());
+  for (std::size_t g = 0; g < read.glints.size(); ++g) {
+    EXPECT_EQ(read.glints[g].illuminator, written.glints[g].illuminator);
+    EXPECT_EQ(read.glints[g].status, written.glints[g].status);
+    if (written.glints[g].status == PathStatus::ok) {
+      EXPECT_NEAR(read.glints[g].pixel.u, written.glints[g].pixel.u, 1e-9);
+      EXPECT_NEAR(read.glints[g].pixel.v, written.glints[g].pixel.v, 1e-9);
+    }
+  }
+  ASSERT_TRUE(read.pupil.ellipse_valid);
+  EXPECT_NEAR(read.pupil.ellipse.center.u, written.pupil.ellipse.center.u, 1e-9);
+  EXPECT_NEAR(read.pupil.ellipse.semi_axis_2_px, written.pupil.ellipse.semi_axis_2_px, 1e-9);
+  EXPECT_NEAR(read.pupil.ellipse.angle_rad, written.pupil.ellipse.angle_rad, 1e-12);
+  ASSERT_EQ(read.pupil.border.size(), written.pupil.border.size());
+  EXPECT_EQ(read.pupil.border[5].status, written.pupil.border[5].status);
+  EXPECT_EQ(read.pupil.refracted_center_status, written.pupil.refracted_center_status);
+}
+
+TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
+  const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote.json");
+  const nlohmann::json good = rendered_labels(scene, compute_truth(scene));
+  const auto expect_error = [](const nlohmann::json& j, const std::string& key, const std::string& rule) {
+    const std::filesystem::path file = write(j, "image_labels_bad.json");
+    try {
+      read_image_labels(file);
+      ADD_FAILURE() << key << ": read";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(file.string()), std::string::npos) << what;
+      EXPECT_NE(what.find(key), std::string::npos) << what;
+      EXPECT_NE(what.find(rule), std::string::npos) << what;
+    }
+  };
+  nlohmann::json j = good;
+  j["views"][0]["glints"][1]["status"] = "shiny";
+  expect_error(j, "views[0].glints[1].status = \"shiny\"", "path status");
+  j = good;
+  j["views"][0]["glints"][0]["u_px"] = "12";
+  expect_error(j, "views[0].glints[0].u_px", "finite number");
+  j = good;
+  j["views"][0]["glints"][0]["illuminator"] = 7;
+  expect_error(j, "views[0].glints[0].illuminator = 7", "integer in [0, 1]");
+  j = good;
+  j.erase("render");
+  expect_error(j, ".render", "missing");
+  j = good;
+  j["render"]["sensor"]["bits"] = 20;
+  expect_error(j, "render.sensor.bits = 20", "[1, 16]");
+  j = good;
+  j["labels_format"] = 99;
+  expect_error(j, "labels_format = 99", "must be 1");
+  j = good;
+  j["views"][0]["pupil"]["ellipse"]["semi_axis_1_px"] = -1;
+  expect_error(j, "semi_axis_1_px", "positive");
+
+  const std::filesystem::path not_json = std::filesystem::path(::testing::TempDir()) / "image_labels_not.json";
+  std::ofstream(not_json) << "{ not json";
+  EXPECT_THROW(read_image_labels(not_json), std::runtime_error);
+  EXPECT_THROW(read_image_labels("/nonexistent/labels.json"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace purkinje

@@ -1,0 +1,170 @@
+// Scoring detections against labels, on hand-made images whose every
+// figure is counted by hand below.
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "purkinje/trackers/scoring.h"
+
+namespace purkinje::trackers {
+namespace {
+
+GlintTruth glint(int light, PathStatus status, Pixel p) {
+  GlintTruth g;
+  g.illuminator = light;
+  g.status = status;
+  g.pixel = p;
+  return g;
+}
+
+// A pupil label centred at c; `seen` border points visible, the rest under a lid.
+PupilTruth pupil(Pixel c, int seen) {
+  PupilTruth p;
+  p.ellipse_valid = true;
+  p.ellipse = {c, 10, 8, 0};
+  for (int k = 0; k < 4; ++k) {
+    PupilBorderPointTruth b;
+    b.status = k < seen ? PathStatus::ok : PathStatus::occluded;
+    p.border.push_back(b);
+  }
+  return p;
+}
+
+Glint found(Pixel p, int light = -1) {
+  Glint g;
+  g.centre = p;
+  g.illuminator = light;
+  return g;
+}
+
+// Image a: two glints seen, one on the sclera, a pupil; b: a glint missed,
+// the pupil hidden by a lid; c: no pupil at all.
+Score hand_made_score() {
+  Scorer scorer;
+  EyeInCameraTruth a;
+  a.glints = {glint(0, PathStatus::ok, {100, 100}), glint(1, PathStatus::ok, {120, 100}),
+              glint(2, PathStatus::off_cornea, {140, 100})};
+  a.pupil = pupil({110, 110}, 4);
+  Detections in_a;
+  in_a.glints = {found({100.3, 100.4}, 0),  // 0.5 px, right light
+                 found({121, 100}, 2),      // 1 px, wrong light
+                 found({140.5, 100}),       // the sclera's glint: not counted
+                 found({200, 200})};        // nothing there
+  in_a.pupils = {{{110, 112}, std::nullopt, 0.9}};  // 2 px
+  scorer.add("a.png", {a}, in_a);
+
+  EyeInCameraTruth b;
+  b.glints = {glint(0, PathStatus::ok, {50, 50})};
+  b.pupil = pupil({60, 60}, 0);
+  Detections in_b;
+  in_b.pupils = {{{60.5, 60}, std::nullopt, std::nullopt}};  // by a hidden pupil: not counted
+  scorer.add("b.png", {b}, in_b);
+
+  EyeInCameraTruth c;  // no glint, no pupil ellipse
+  Detections in_c;
+  in_c.pupils = {{{10, 10}, std::nullopt, std::nullopt}};
+  scorer.add("c.png", {c}, in_c);
+  return scorer.score();
+}
+
+TEST(Scorer, CountsFoundMissedFalseAndUncountedDetections) {
+  const Score s = hand_made_score();
+  EXPECT_EQ(s.images, 3);
+  const FeatureSummary& g = s.glints;
+  EXPECT_EQ(g.labelled, 3);  // two in a, one in b
+  EXPECT_EQ(g.detected, 4);
+  EXPECT_EQ(g.found, 2);
+  EXPECT_EQ(g.false_positives, 1);
+  EXPECT_EQ(g.not_counted, 1);
+  EXPECT_DOUBLE_EQ(g.rate_within(1), 2.0 / 3);  // 0.5 and exactly 1 px
+  EXPECT_DOUBLE_EQ(g.rate_within(5), 2.0 / 3);
+  EXPECT_DOUBLE_EQ(g.false_positive_rate(), 1.0 / 3);  // of the three counted detections
+  EXPECT_EQ(g.identity_told, 2);
+  EXPECT_EQ(g.identity_correct, 1);
+  EXPECT_DOUBLE_EQ(g.identity_rate(), 0.5);
+  EXPECT_EQ(g.error_px.count, 2);
+  EXPECT_NEAR(g.error_px.mean, 0.75, 1e-12);  // 100.3 is not exact
+  EXPECT_NEAR(g.error_px.median, 0.75, 1e-12);
+  EXPECT_DOUBLE_EQ(g.error_px.p95, 1.0);  // nearest rank: the 2nd of 2
+  EXPECT_DOUBLE_EQ(g.error_px.max, 1.0);
+
+  const FeatureSummary& p = s.pupils;
+  EXPECT_EQ(p.labelled, 1);  // b's is wholly hidden, c has none
+  EXPECT_EQ(p.detected, 3);
+  EXPECT_EQ(p.found, 1);
+  EXPECT_EQ(p.within_1px, 0);
+  EXPECT_EQ(p.within_2px, 1);
+  EXPECT_EQ(p.false_positives, 1);
+  EXPECT_EQ(p.not_counted, 1);
+  EXPECT_DOUBLE_EQ(p.false_positive_rate(), 0.5);
+  EXPECT_DOUBLE_EQ(p.error_px.median, 2.0);
+  EXPECT_EQ(p.identity_told, 0);
+}
+
+TEST(Scorer, PairsNearestFirstAndLeavesTheFartherDetectionFalse) {
+  Scorer scorer;
+  EyeInCameraTruth v;
+  v.glints = {glint(0, PathStatus::ok, {10, 10}), glint(1, PathStatus::ok, {14, 10})};
+  Detections d;
+  d.glints = {found({12.2, 10}), found({13.9, 10}), found({10.1, 10})};
+  scorer.add("x", {v}, d);
+  const Score s = scorer.score();
+  // (13.9) takes light 1 at 0.1 px, (10.1) light 0 at 0.1 px; (12.2) is left.
+  EXPECT_EQ(s.glints.found, 2);
+  EXPECT_EQ(s.glints.false_positives, 1);
+  EXPECT_NEAR(s.glints.error_px.max, 0.1, 1e-12);
+  // A detection beyond the radius is a miss and a false positive.
+  Scorer tight({0.05});
+  tight.add("x", {v}, d);
+  EXPECT_EQ(tight.score().glints.found, 0);
+  EXPECT_EQ(tight.score().glints.false_positives, 3);
+  EXPECT_EQ(tight.score().glints.labelled, 2);
+}
+
+TEST(Scorer, RanksTheWorstImagesByWrongThenError) {
+  const Score s = hand_made_score();
+  // a: a false glint, 2 px worst; b: a missed glint; c: a false pupil.
+  EXPECT_EQ(worst_images(s, 2), (std::vector<std::string>{"a.png", "b.png"}));
+  EXPECT_EQ(worst_images(s, 10).size(), 3u);
+  EXPECT_TRUE(worst_images(s, 0).empty());
+}
+
+TEST(Scorer, WritesRowsAndSummariesWithoutNaN) {
+  const Score s = hand_made_score();
+  const std::string csv = score_csv(s);
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity");
+  EXPECT_NE(csv.find("\na.png,glint,0,1,found,120,100,121,100,1,wrong\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na.png,glint,,,false_positive,,,200,200,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nb.png,glint,0,0,missed,50,50,,,,\n"), std::string::npos) << csv;
+  EXPECT_EQ(csv.find("nan"), std::string::npos);
+
+  const nlohmann::json j = nlohmann::json::parse(score_json(s));
+  EXPECT_EQ(j["images"], 3);
+  EXPECT_DOUBLE_EQ(j["glints"]["identity_rate"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(j["pupils"]["within_px"]["2"].get<double>(), 1.0);
+  EXPECT_TRUE(j["pupils"].find("identity_rate") == j["pupils"].end());
+
+  const std::string table = score_table(s);
+  EXPECT_NE(table.find("3 images"), std::string::npos) << table;
+  EXPECT_EQ(table.find("nan"), std::string::npos) << table;
+
+  // Nothing at all scores as zeros, not NaN.
+  const Score empty = Scorer().score();
+  EXPECT_EQ(score_json(empty).find("nan"), std::string::npos);
+  EXPECT_EQ(score_table(empty).find("nan"), std::string::npos);
+}
+
+TEST(Scorer, RejectsABadRadius) {
+  EXPECT_THROW(Scorer({0}), std::invalid_argument);
+  EXPECT_THROW(Scorer({std::nan("")}), std::invalid_argument);
+  EXPECT_THROW(hand_made_score().glints.rate_within(3), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace purkinje::trackers

@@ -1,0 +1,193 @@
+#include "purkinje/trackers/detections_file.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace purkinje::trackers {
+
+namespace {
+
+// The cells of one CSV line (RFC 4180 quoting; no line breaks in cells).
+// False when a quote is not closed.
+bool split_cells(const std::string& line, std::vector<std::string>& cells) {
+  cells.assign(1, "");
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cells.back() += '"', ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cells.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      cells.emplace_back();
+    } else {
+      cells.back() += c;
+    }
+  }
+  return !quoted;
+}
+
+enum Column { image, feature, u_px, v_px, illuminator, semi_axis_1_px, semi_axis_2_px, angle_deg, confidence, kColumns };
+constexpr const char* kNames[kColumns] = {"image", "feature", "u_px", "v_px", "illuminator",
+                                          "semi_axis_1_px", "semi_axis_2_px", "angle_deg", "confidence"};
+
+class Row {
+ public:
+  Row(const std::filesystem::path& file, int line, const std::vector<std::string>& cells, const int* where)
+      : file_(file), line_(line), cells_(cells), where_(where) {}
+
+  [[noreturn]] void fail(Column c, const std::string& rule) const {
+    throw std::runtime_error(file_.string() + ":" + std::to_string(line_) + ": column " + kNames[c] + " = \"" +
+                             text(c) + "\": " + rule);
+  }
+  std::string text(Column c) const { return where_[c] >= 0 ? cells_[where_[c]] : std::string(); }
+  bool empty(Column c) const { return text(c).empty(); }
+  double number(Column c) const {
+    const std::string t = text(c);
+    double x = 0;
+    const auto [end, error] = std::from_chars(t.data(), t.data() + t.size(), x);
+    if (t.empty() || error != std::errc() || end != t.data() + t.size() || !std::isfinite(x)) {
+      fail(c, "must be a finite number");
+    }
+    return x;
+  }
+  std::optional<double> optional_number(Column c) const {
+    if (empty(c)) return std::nullopt;
+    return number(c);
+  }
+
+ private:
+  const std::filesystem::path& file_;
+  int line_;
+  const std::vector<std::string>& cells_;
+  const int* where_;
+};
+
+}  // namespace
+
+std::map<std::string, Detections> read_detections_csv(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(file.string() + ": cannot be read");
+  const auto fail = [&](int line, const std::string& what) {
+    throw std::runtime_error(file.string() + ":" + std::to_string(line) + ": " + what);
+  };
+  std::map<std::string, Detections> out;
+  std::vector<std::string> cells;
+  int where[kColumns];
+  std::fill(where, where + kColumns, -1);
+  std::size_t header_cells = 0;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos) continue;  // blank
+    if (!split_cells(line, cells)) fail(number, "a quoted cell is not closed");
+    if (header_cells == 0) {
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        const auto name = std::find_if(std::begin(kNames), std::end(kNames), [&](const char* n) { return cells[i] == n; });
+        if (name == std::end(kNames)) {
+          fail(number, "header: unknown column \"" + cells[i] + "\" (columns: image, feature, u_px, v_px, "
+                       "illuminator, semi_axis_1_px, semi_axis_2_px, angle_deg, confidence)");
+        }
+        int& slot = where[name - std::begin(kNames)];
+        if (slot >= 0) fail(number, "header: column \"" + cells[i] + "\" twice");
+        slot = static_cast<int>(i);
+      }
+      for (const Column c : {image, feature, u_px, v_px}) {
+        if (where[c] < 0) fail(number, std::string("header: the column ") + kNames[c] + " is missing");
+      }
+      header_cells = cells.size();
+      continue;
+    }
+    if (cells.size() != header_cells) {
+      fail(number, std::to_string(cells.size()) + " cells: the header has " + std::to_string(header_cells));
+    }
+    const Row row(file, number, cells, where);
+    if (row.empty(image)) row.fail(image, "must name an image");
+    const Pixel centre{row.number(u_px), row.number(v_px)};
+    const std::optional<double> light = row.optional_number(illuminator);
+    const std::optional<double> a = row.optional_number(semi_axis_1_px), b = row.optional_number(semi_axis_2_px),
+                                angle = row.optional_number(angle_deg), conf = row.optional_number(confidence);
+    Detections& d = out[row.text(image)];
+    if (row.text(feature) == "glint") {
+      for (const Column c : {semi_axis_1_px, semi_axis_2_px, angle_deg, confidence}) {
+        if (!row.empty(c)) row.fail(c, "is a pupil's column: leave it empty for a glint");
+      }
+      Glint g;
+      g.centre = centre;
+      if (light) {
+        if (!(*light >= 0 && *light < 1e6 && *light == std::floor(*light))) {
+          row.fail(illuminator, "must be a light's index, an integer from 0");
+        }
+        g.illuminator = static_cast<int>(*light);
+      }
+      d.glints.push_back(g);
+    } else if (row.text(feature) == "pupil") {
+      if (light) row.fail(illuminator, "is a glint's column: leave it empty for a pupil");
+      PupilFound p;
+      p.centre = centre;
+      if (a || b || angle) {
+        if (!a || !(*a > 0)) row.fail(semi_axis_1_px, "must be a positive number (with the other two ellipse columns)");
+        if (!b || !(*b > 0)) row.fail(semi_axis_2_px, "must be a positive number (with the other two ellipse columns)");
+        if (!angle) row.fail(angle_deg, "must be a number (with the other two ellipse columns)");
+        p.ellipse = Ellipse{centre, *a, *b, *angle * std::numbers::pi / 180};
+      }
+      if (conf) {
+        if (!(*conf >= 0 && *conf <= 1)) row.fail(confidence, "must be in [0, 1]");
+        p.confidence = *conf;
+      }
+      d.pupils.push_back(p);
+    } else {
+      row.fail(feature, "must be glint or pupil");
+    }
+  }
+  if (header_cells == 0) throw std::runtime_error(file.string() + ": empty: a header row is needed");
+  return out;
+}
+
+std::string detections_csv(const std::map<std::string, Detections>& detections) {
+  std::ostringstream out;
+  out << "image,feature,u_px,v_px,illuminator,semi_axis_1_px,semi_axis_2_px,angle_deg,confidence\n";
+  out << std::setprecision(10);
+  const auto quoted = [](const std::string& s) {
+    if (s.find_first_of(",\"") == std::string::npos) return s;
+    std::string q = "\"";
+    for (const char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  for (const auto& [image_name, d] : detections) {
+    for (const Glint& g : d.glints) {
+      out << quoted(image_name) << ",glint," << g.centre.u << ',' << g.centre.v << ',';
+      if (g.illuminator >= 0) out << g.illuminator;
+      out << ",,,,\n";
+    }
+    for (const PupilFound& p : d.pupils) {
+      out << quoted(image_name) << ",pupil," << p.centre.u << ',' << p.centre.v << ",,";
+      if (p.ellipse) {
+        out << p.ellipse->semi_axis_1_px << ',' << p.ellipse->semi_axis_2_px << ','
+            << p.ellipse->angle_rad * 180 / std::numbers::pi;
+      } else {
+        out << ",,";
+      }
+      out << ',';
+      if (p.confidence) out << *p.confidence;
+      out << '\n';
+    }
+  }
+  return out.str();
+}
+
+}  // namespace purkinje::trackers

@@ -1,0 +1,316 @@
+#include "purkinje/trackers/scoring.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+namespace purkinje::trackers {
+
+const char* to_string(Feature f) { return f == Feature::glint ? "glint" : "pupil"; }
+
+const char* to_string(Outcome o) {
+  switch (o) {
+    case Outcome::found: return "found";
+    case Outcome::missed: return "missed";
+    case Outcome::false_positive: return "false_positive";
+    case Outcome::not_counted: return "not_counted";
+  }
+  return "unknown";
+}
+
+namespace {
+
+double distance(const Pixel& a, const Pixel& b) { return std::hypot(a.u - b.u, a.v - b.v); }
+
+struct Label {
+  Pixel pixel;
+  int eye = -1, illuminator = -1;
+  bool counted = true;  // false: there, but left out of the score
+};
+
+// Pairs detections with labels nearest first within the radius; writes
+// each label's and detection's score, and returns for each detection the
+// label it was paired with (-1: none).
+std::vector<int> pair_nearest(const std::vector<Label>& labels, const std::vector<Pixel>& detections, double radius) {
+  struct Pair {
+    double distance;
+    int label, detection;
+  };
+  std::vector<Pair> pairs;
+  for (int l = 0; l < static_cast<int>(labels.size()); ++l) {
+    if (!labels[l].counted) continue;
+    for (int d = 0; d < static_cast<int>(detections.size()); ++d) {
+      const double r = distance(labels[l].pixel, detections[d]);
+      if (r <= radius) pairs.push_back({r, l, d});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return std::tie(a.distance, a.label, a.detection) < std::tie(b.distance, b.label, b.detection);
+  });
+  std::vector<int> paired(detections.size(), -1);
+  std::vector<bool> label_used(labels.size(), false);
+  for (const Pair& p : pairs) {
+    if (label_used[p.label] || paired[p.detection] >= 0) continue;
+    label_used[p.label] = true;
+    paired[p.detection] = p.label;
+  }
+  return paired;
+}
+
+void tally(FeatureSummary& s, const FeatureScore& f) {
+  switch (f.outcome) {
+    case Outcome::found:
+      ++s.labelled, ++s.detected, ++s.found;
+      s.within_1px += *f.error_px <= 1;
+      s.within_2px += *f.error_px <= 2;
+      s.within_5px += *f.error_px <= 5;
+      if (f.identity_correct) ++s.identity_told, s.identity_correct += *f.identity_correct;
+      break;
+    case Outcome::missed: ++s.labelled; break;
+    case Outcome::false_positive: ++s.detected, ++s.false_positives; break;
+    case Outcome::not_counted: ++s.detected, ++s.not_counted; break;
+  }
+}
+
+// Scores one feature of one image: labels (counted or not) against detections.
+void score_feature(Score& score, FeatureSummary& summary, const std::string& image, Feature feature,
+                   const std::vector<Label>& labels, const std::vector<Pixel>& detections,
+                   const std::vector<int>& told_illuminator) {
+  const std::vector<int> paired = pair_nearest(labels, detections, score.settings.match_radius_px);
+  std::vector<bool> label_found(labels.size(), false);
+  for (std::size_t d = 0; d < detections.size(); ++d) {
+    FeatureScore f;
+    f.image = image;
+    f.feature = feature;
+    f.detection = detections[d];
+    if (paired[d] >= 0) {
+      const Label& l = labels[paired[d]];
+      label_found[paired[d]] = true;
+      f.eye = l.eye, f.illuminator = l.illuminator, f.label = l.pixel;
+      f.outcome = Outcome::found;
+      f.error_px = distance(l.pixel, detections[d]);
+      if (feature == Feature::glint && told_illuminator[d] >= 0) f.identity_correct = told_illuminator[d] == l.illuminator;
+    } else {
+      f.outcome = Outcome::false_positive;
+      for (const Label& l : labels) {
+        if (!l.counted && distance(l.pixel, detections[d]) <= score.settings.match_radius_px) {
+          f.outcome = Outcome::not_counted;
+          f.eye = l.eye, f.illuminator = l.illuminator, f.label = l.pixel;
+          break;
+        }
+      }
+    }
+    tally(summary, f);
+    score.features.push_back(f);
+  }
+  for (std::size_t l = 0; l < labels.size(); ++l) {
+    if (!labels[l].counted || label_found[l]) continue;
+    FeatureScore f;
+    f.image = image;
+    f.feature = feature;
+    f.eye = labels[l].eye, f.illuminator = labels[l].illuminator, f.label = labels[l].pixel;
+    f.outcome = Outcome::missed;
+    tally(summary, f);
+    score.features.push_back(f);
+  }
+}
+
+ErrorStatistics statistics(std::vector<double> errors) {
+  ErrorStatistics s;
+  s.count = static_cast<int>(errors.size());
+  if (errors.empty()) return s;
+  std::sort(errors.begin(), errors.end());
+  double sum = 0;
+  for (const double e : errors) sum += e;
+  s.mean = sum / errors.size();
+  const std::size_t n = errors.size();
+  s.median = n % 2 ? errors[n / 2] : 0.5 * (errors[n / 2 - 1] + errors[n / 2]);
+  // The nearest-rank 95th percentile: at least 95% of the errors are at or below it.
+  s.p95 = errors[static_cast<std::size_t>(std::ceil(0.95 * n)) - 1];
+  s.max = errors.back();
+  return s;
+}
+
+void update_statistics(Score& score) {
+  std::vector<double> glints, pupils;
+  for (const FeatureScore& f : score.features) {
+    if (f.outcome != Outcome::found) continue;
+    (f.feature == Feature::glint ? glints : pupils).push_back(*f.error_px);
+  }
+  score.glints.error_px = statistics(std::move(glints));
+  score.pupils.error_px = statistics(std::move(pupils));
+}
+
+double fraction(int part, int whole) { return whole > 0 ? static_cast<double>(part) / whole : 0.0; }
+
+}  // namespace
+
+double FeatureSummary::rate_within(int px) const {
+  if (px == 1) return fraction(within_1px, labelled);
+  if (px == 2) return fraction(within_2px, labelled);
+  if (px == 5) return fraction(within_5px, labelled);
+  throw std::invalid_argument("FeatureSummary::rate_within: " + std::to_string(px) + " px: must be 1, 2 or 5");
+}
+double FeatureSummary::false_positive_rate() const { return fraction(false_positives, detected - not_counted); }
+double FeatureSummary::identity_rate() const { return fraction(identity_correct, found); }
+
+Scorer::Scorer(const ScoringSettings& settings) {
+  if (!(settings.match_radius_px > 0 && settings.match_radius_px <= 1000)) {
+    throw std::invalid_argument("ScoringSettings: match_radius_px = " + std::to_string(settings.match_radius_px) +
+                                ": must be in (0, 1000]");
+  }
+  score_.settings = settings;
+}
+
+void Scorer::add(const std::string& image, const std::vector<EyeInCameraTruth>& views, const Detections& found) {
+  ++score_.images;
+  std::vector<Label> glints, pupils;
+  for (const EyeInCameraTruth& view : views) {
+    for (const GlintTruth& g : view.glints) {
+      // A glint on the sclera or at a lid's edge may show: a detection
+      // there is neither right nor wrong.
+      const bool counted = g.status == PathStatus::ok;
+      if (counted || g.status == PathStatus::off_cornea || g.status == PathStatus::occluded) {
+        glints.push_back({g.pixel, view.eye, g.illuminator, counted});
+      }
+    }
+    if (view.pupil.ellipse_valid) {
+      const bool seen = std::any_of(view.pupil.border.begin(), view.pupil.border.end(),
+                                    [](const PupilBorderPointTruth& b) { return b.status == PathStatus::ok; });
+      pupils.push_back({view.pupil.ellipse.center, view.eye, -1, seen});
+    }
+  }
+  std::vector<Pixel> glint_centres, pupil_centres;
+  std::vector<int> told;
+  for (const Glint& g : found.glints) glint_centres.push_back(g.centre), told.push_back(g.illuminator);
+  for (const PupilFound& p : found.pupils) pupil_centres.push_back(p.centre);
+  score_feature(score_, score_.glints, image, Feature::glint, glints, glint_centres, told);
+  score_feature(score_, score_.pupils, image, Feature::pupil, pupils, pupil_centres, {});
+}
+
+Score Scorer::score() const {
+  Score s = score_;
+  update_statistics(s);
+  return s;
+}
+
+std::vector<std::string> worst_images(const Score& score, int n) {
+  struct Badness {
+    int wrong = 0;     // misses and false positives
+    double worst = 0;  // largest error among the found
+  };
+  std::map<std::string, Badness> by_image;
+  std::vector<std::string> order;
+  for (const FeatureScore& f : score.features) {
+    auto [it, fresh] = by_image.try_emplace(f.image);
+    if (fresh) order.push_back(f.image);
+    if (f.outcome == Outcome::missed || f.outcome == Outcome::false_positive) ++it->second.wrong;
+    if (f.error_px) it->second.worst = std::max(it->second.worst, *f.error_px);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](const std::string& a, const std::string& b) {
+    const Badness &x = by_image.at(a), &y = by_image.at(b);
+    return std::tie(x.wrong, x.worst) > std::tie(y.wrong, y.worst);
+  });
+  if (static_cast<int>(order.size()) > n) order.resize(std::max(0, n));
+  return order;
+}
+
+namespace {
+
+std::string fixed(double x, int digits = 3) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << x;
+  return s.str();
+}
+
+}  // namespace
+
+std::string score_table(const Score& score) {
+  std::ostringstream out;
+  out << score.images << " images; a detection within " << fixed(score.settings.match_radius_px, 1)
+      << " px of a label is paired with it\n\n";
+  out << "feature  labelled  detected  within 1 px  2 px    5 px    false pos.  error px: mean   median  p95     max"
+         "     identity\n";
+  const auto row = [&](const char* name, const FeatureSummary& s, bool identity) {
+    out << std::left << std::setw(9) << name << std::right << std::setw(8) << s.labelled << std::setw(10)
+        << s.detected << std::setw(13) << fixed(s.rate_within(1)) << std::setw(8) << fixed(s.rate_within(2))
+        << std::setw(8) << fixed(s.rate_within(5)) << std::setw(12) << fixed(s.false_positive_rate())
+        << std::setw(16) << fixed(s.error_px.mean) << std::setw(8) << fixed(s.error_px.median) << std::setw(8)
+        << fixed(s.error_px.p95) << std::setw(8) << fixed(s.error_px.max);
+    if (identity && s.identity_told > 0) {
+      out << std::setw(13) << fixed(s.identity_rate());
+    } else {
+      out << std::setw(13) << "-";
+    }
+    out << "\n";
+  };
+  row("glints", score.glints, true);
+  row("pupils", score.pupils, false);
+  out << "\nwithin: of the labelled; false pos.: of the counted detections; identity: right light among the "
+         "found glints\n";
+  if (score.glints.not_counted + score.pupils.not_counted > 0) {
+    out << "not counted (by a glint on the sclera or under a lid, or a hidden pupil): "
+        << score.glints.not_counted << " glint and " << score.pupils.not_counted << " pupil detections\n";
+  }
+  return out.str();
+}
+
+std::string score_csv(const Score& score) {
+  std::ostringstream out;
+  out << "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity\n";
+  const auto quoted = [](const std::string& s) {
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (const char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  const auto number = [](double x) {
+    std::ostringstream s;
+    s << std::setprecision(10) << x;
+    return s.str();
+  };
+  for (const FeatureScore& f : score.features) {
+    out << quoted(f.image) << ',' << to_string(f.feature) << ',' << (f.eye >= 0 ? std::to_string(f.eye) : "")
+        << ',' << (f.illuminator >= 0 ? std::to_string(f.illuminator) : "") << ',' << to_string(f.outcome) << ','
+        << (f.label ? number(f.label->u) + ',' + number(f.label->v) : ",") << ','
+        << (f.detection ? number(f.detection->u) + ',' + number(f.detection->v) : ",") << ','
+        << (f.error_px ? number(*f.error_px) : "") << ','
+        << (f.identity_correct ? (*f.identity_correct ? "correct" : "wrong") : "") << '\n';
+  }
+  return out.str();
+}
+
+std::string score_json(const Score& score) {
+  using json = nlohmann::json;
+  const auto summary = [](const FeatureSummary& s, bool identity) {
+    json j;
+    j["labelled"] = s.labelled;
+    j["detected"] = s.detected;
+    j["found"] = s.found;
+    j["within_px"] = {{"1", s.rate_within(1)}, {"2", s.rate_within(2)}, {"5", s.rate_within(5)}};
+    j["false_positives"] = s.false_positives;
+    j["false_positive_rate"] = s.false_positive_rate();
+    j["not_counted"] = s.not_counted;
+    j["error_px"] = {{"count", s.error_px.count}, {"mean", s.error_px.mean}, {"median", s.error_px.median},
+                     {"p95", s.error_px.p95},     {"max", s.error_px.max}};
+    if (identity) {
+      j["identity_told"] = s.identity_told;
+      j["identity_correct"] = s.identity_correct;
+      j["identity_rate"] = s.identity_told > 0 ? json(s.identity_rate()) : json(nullptr);
+    }
+    return j;
+  };
+  json root;
+  root["images"] = score.images;
+  root["match_radius_px"] = score.settings.match_radius_px;
+  root["glints"] = summary(score.glints, true);
+  root["pupils"] = summary(score.pupils, false);
+  return root.dump(2) + "\n";
+}
+
+}  // namespace purkinje::trackers

@@ -9,10 +9,15 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <numbers>
+#include <sstream>
 #include <string>
 
+#include "commands.h"
+#include "purkinje/models/eye_variation.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/truth.h"
@@ -26,12 +31,16 @@ namespace {
 #define PURKINJE_VERSION "0.1.0"
 #endif
 
-enum ExitCode : int { kOk = 0, kBadInput = 1, kUsageError = 2, kOutputError = 3 };
+using purkinje::tools::kBadInput;
+using purkinje::tools::kOk;
+using purkinje::tools::kOutputError;
+using purkinje::tools::kUsageError;
 
 constexpr const char* kExitCodes =
     "Exit codes:\n"
     "  0  success\n"
-    "  1  bad input: the scene file is missing, malformed or invalid (message on stderr)\n"
+    "  1  bad input: a scene, labels, image or detections file is missing, malformed or invalid\n"
+    "     (message on stderr)\n"
     "  2  usage error: unknown option, missing or invalid argument\n"
     "  3  output error: the output could not be written (no partial file is left)";
 
@@ -91,6 +100,10 @@ struct RenderRequest {
   bool no_noise = false;
   bool glint_masks = false;
   int threads = 0;
+  int variations = 0;  // 0: the scene as it is
+  std::uint64_t variation_seed = 1;
+  double max_gaze_deg = 30;
+  double min_pupil_mm = 1, max_pupil_mm = 4;
 };
 
 // File names keep to a portable set of characters.
@@ -105,37 +118,17 @@ std::string file_stem(const std::string& scene, const std::string& camera) {
   return stem;
 }
 
-int run_render(const RenderRequest& request) {
+// Renders `cameras` of `scene` and writes their files under `stem_prefix`
+// as one all-or-nothing set; returns an exit code, the error on stderr.
+int render_and_write(const RenderRequest& request, const purkinje::Scene& scene, const std::vector<int>& cameras,
+                     const std::string& stem_prefix, purkinje::renderer::RenderOptions options,
+                     const std::string& progress_label) {
   namespace r = purkinje::renderer;
-  purkinje::Scene scene;
-  std::vector<int> cameras;
-  r::RenderOptions options;
-  try {
-    scene = purkinje::load_scene(request.scene_file);
-    for (int i = 0; i < static_cast<int>(scene.cameras.size()); ++i) {
-      if (request.camera.empty() || scene.cameras[i].name() == request.camera) cameras.push_back(i);
-    }
-    if (cameras.empty()) {
-      throw std::invalid_argument(request.scene_file + ": no camera named '" + request.camera + "'");
-    }
-  } catch (const std::exception& error) {
-    std::cerr << "purkinje render: error: " << error.what() << "\n";
-    return kBadInput;
-  }
-  options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
-  options.reference_photons_per_light = request.photons;
-  options.samples_per_pixel = request.samples;
-  options.edge_samples_per_pixel = request.edge_samples;
-  options.seed = request.seed;
-  options.noise = !request.no_noise;
-  options.per_light_glint_masks = request.glint_masks;
-  options.threads = request.threads;
-
   // Every camera is rendered before anything is written, so a failure
   // leaves no file at all: all images go out in one all-or-nothing set.
   std::vector<std::string> stems;
   for (int camera : cameras) {
-    const std::string stem = file_stem(scene.name, scene.cameras[camera].name());
+    const std::string stem = file_stem(stem_prefix, scene.cameras[camera].name());
     if (std::find(stems.begin(), stems.end(), stem) != stems.end()) {
       std::cerr << "purkinje render: error: " << request.scene_file << ": cameras '"
                 << scene.cameras[camera].name() << "' and another camera would both write " << stem
@@ -147,7 +140,7 @@ int run_render(const RenderRequest& request) {
   const bool terminal = isatty(STDERR_FILENO) != 0;
   std::vector<r::RenderResult> results;
   for (int camera : cameras) {
-    const std::string& name = scene.cameras[camera].name();
+    const std::string name = progress_label + scene.cameras[camera].name();
     std::mutex progress_mutex;
     int shown = -1;
     if (terminal) {
@@ -191,6 +184,70 @@ int run_render(const RenderRequest& request) {
     std::cerr << "purkinje render: error: " << error.what() << "\n";
     return kOutputError;
   }
+  return kOk;
+}
+
+int run_render(const RenderRequest& request) {
+  namespace r = purkinje::renderer;
+  purkinje::Scene scene;
+  std::vector<int> cameras;
+  std::vector<purkinje::EyeVariation> variations;
+  r::RenderOptions options;
+  try {
+    scene = purkinje::load_scene(request.scene_file);
+    for (int i = 0; i < static_cast<int>(scene.cameras.size()); ++i) {
+      if (request.camera.empty() || scene.cameras[i].name() == request.camera) cameras.push_back(i);
+    }
+    if (cameras.empty()) {
+      throw std::invalid_argument(request.scene_file + ": no camera named '" + request.camera + "'");
+    }
+    if (request.variations > 0) {
+      if (scene.eyes.empty()) throw std::invalid_argument(request.scene_file + ": --variations needs an eye");
+      constexpr double kDegree = std::numbers::pi / 180;
+      variations = purkinje::random_eye_variations(
+          request.variation_seed, request.variations,
+          {request.max_gaze_deg * kDegree, request.min_pupil_mm, request.max_pupil_mm});
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje render: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
+  options.reference_photons_per_light = request.photons;
+  options.samples_per_pixel = request.samples;
+  options.edge_samples_per_pixel = request.edge_samples;
+  options.seed = request.seed;
+  options.noise = !request.no_noise;
+  options.per_light_glint_masks = request.glint_masks;
+  options.threads = request.threads;
+  if (variations.empty()) return render_and_write(request, scene, cameras, scene.name, options, "");
+
+  // Each variation's files are written as soon as it is rendered (a set
+  // of hundreds would not fit in memory), each all or nothing; the list
+  // of variations last.
+  const int digits = std::max(4, static_cast<int>(std::to_string(variations.size() - 1).size()));
+  std::ostringstream list;
+  list << "index,stem,seed,gaze_turn_deg,turn_direction_deg,pupil_radius_mm\n" << std::setprecision(10);
+  for (std::size_t k = 0; k < variations.size(); ++k) {
+    std::string index = std::to_string(k);
+    index.insert(0, static_cast<std::size_t>(digits) - index.size(), '0');
+    const std::string stem = (scene.name.empty() ? std::string("scene") : scene.name) + "_v" + index;
+    options.seed = request.seed + k;  // the noise differs from image to image
+    const purkinje::EyeVariation& v = variations[k];
+    const int code = render_and_write(request, purkinje::with_eye_variation(scene, v), cameras, stem, options,
+                                      "variation " + std::to_string(k) + ", ");
+    if (code != kOk) return code;
+    list << k << ',' << stem << ',' << options.seed << ',' << v.gaze_turn_rad * 180 / std::numbers::pi << ','
+         << v.turn_direction_rad * 180 / std::numbers::pi << ',' << v.pupil_radius_mm << '\n';
+  }
+  const std::filesystem::path list_file = std::filesystem::path(request.output_dir) / "variations.csv";
+  try {
+    purkinje::write_file_atomically(list_file, list.str());
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje render: error: " << error.what() << "\n";
+    return kOutputError;
+  }
+  std::cout << "wrote " << list_file.string() << "\n";
   return kOk;
 }
 
@@ -254,6 +311,62 @@ int run(int argc, char** argv) {
   render->add_option("--threads", render_request.threads, "Worker threads (0: all); output does not depend on it")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
+  render->add_option("--variations", render_request.variations,
+                     "Render this many variations of the scene: its first eye turned about its\n"
+                     "centre of rotation and its pupil resized, at random (0: the scene as it is)")
+      ->check(CLI::Range(0, 10000000))
+      ->capture_default_str();
+  render->add_option("--variation-seed", render_request.variation_seed, "Seed of the variations' draws")
+      ->capture_default_str();
+  render->add_option("--max-gaze-deg", render_request.max_gaze_deg,
+                     "Variations: gaze uniform over the cap within this angle of the scene's")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+  render->add_option("--min-pupil-mm", render_request.min_pupil_mm, "Variations: smallest pupil radius")
+      ->check(CLI::Range(0.1, 10.0))
+      ->capture_default_str();
+  render->add_option("--max-pupil-mm", render_request.max_pupil_mm, "Variations: largest pupil radius")
+      ->check(CLI::Range(0.1, 10.0))
+      ->capture_default_str();
+
+  purkinje::tools::TrackRequest track_request;
+  CLI::App* track = app.add_subcommand(
+      "track", "Run purkinje's glint and pupil detectors over labelled images and score them");
+  track->footer(std::string("INPUTS are labels files (.json, as purkinje render writes them), images beside\n"
+                            "their labels, or folders of them. Writes DIR/score.txt, score.csv, score.json,\n"
+                            "detections.csv and overlays/ (docs/cli.md, docs/trackers.md).\n\n") +
+                kExitCodes);
+  track->add_option("INPUTS", track_request.inputs, "Labels files, images or folders")->required();
+  track->add_option("-o,--output", track_request.output_dir, "Output folder (created if missing)")->required();
+  track->add_option("--scene", track_request.scene_file,
+                    "Scene file of the tracker's rig and nominal eye: glints are identified\n"
+                    "from where its lights put them (default: glints not identified)");
+  track->add_option("--overlays", track_request.overlays, "Draw this many of the worst images")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  track->add_option("--match-radius", track_request.match_radius_px,
+                    "A detection within this many pixels of a label is paired with it")
+      ->check(CLI::Range(0.001, 1000.0))
+      ->capture_default_str();
+
+  purkinje::tools::ScoreRequest score_request;
+  CLI::App* score = app.add_subcommand(
+      "score", "Score another tracker's detections (CSV) against the labels of the images");
+  score->footer(std::string("The detections file's columns: image, feature (glint or pupil), u_px, v_px,\n"
+                            "and optionally illuminator, semi_axis_1_px, semi_axis_2_px, angle_deg,\n"
+                            "confidence (docs/trackers.md). Writes DIR/score.txt, score.csv, score.json\n"
+                            "and overlays/.\n\n") +
+                kExitCodes);
+  score->add_option("--detections", score_request.detections_file, "Detections file (CSV)")->required();
+  score->add_option("INPUTS", score_request.inputs, "Labels files, images or folders")->required();
+  score->add_option("-o,--output", score_request.output_dir, "Output folder (created if missing)")->required();
+  score->add_option("--overlays", score_request.overlays, "Draw this many of the worst images")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  score->add_option("--match-radius", score_request.match_radius_px,
+                    "A detection within this many pixels of a label is paired with it")
+      ->check(CLI::Range(0.001, 1000.0))
+      ->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -263,6 +376,8 @@ int run(int argc, char** argv) {
   }
   if (*truth) return run_truth(truth_request);
   if (*render) return run_render(render_request);
+  if (*track) return purkinje::tools::run_track(track_request);
+  if (*score) return purkinje::tools::run_score(score_request);
   return kUsageError;  // unreachable: a subcommand is required
 }
 

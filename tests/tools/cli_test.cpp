@@ -178,7 +178,7 @@ TEST_F(Cli, WritesJsonToStandardOutputWithoutOutputOption) {
 }
 
 TEST_F(Cli, HelpExitsZeroForTheProgramAndEverySubcommand) {
-  for (const char* arguments : {"--help", "truth --help", "render --help"}) {
+  for (const char* arguments : {"--help", "truth --help", "render --help", "track --help", "score --help"}) {
     EXPECT_EQ(run(arguments), 0) << arguments;
     EXPECT_NE(out().find("Usage"), std::string::npos) << arguments << ": " << out();
     EXPECT_NE(out().find("Exit codes"), std::string::npos) << arguments << ": " << out();
@@ -346,3 +346,93 @@ TEST_F(Cli, RenderOntoAFullDiskExitsThreeAndLeavesNoFile) {
 }
 
 }  // namespace
+
+// A small labelled set: the remote scene's eye turned and its pupil
+// resized three times, tracked, then the detections scored again as
+// another tracker's would be.
+TEST_F(Cli, RendersVariationsThenTracksAndScoresThem) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  const fs::path set = output_dir_ / "set";
+  ASSERT_EQ(run("render " + scene + " -o " + quoted(set.string()) + " --variations 3 --seed 5 --edge-samples 0"), 0)
+      << err();
+  for (const char* stem : {"remote_v0000_cam0", "remote_v0001_cam0", "remote_v0002_cam0"}) {
+    for (const char* extension : {".png", ".exr", ".json"}) {
+      EXPECT_TRUE(fs::exists(set / (std::string(stem) + extension))) << stem << extension;
+    }
+  }
+  const std::string list = read(set / "variations.csv");
+  EXPECT_EQ(std::count(list.begin(), list.end(), '\n'), 4) << list;
+  const json labels = json::parse(read(set / "remote_v0001_cam0.json"));
+  EXPECT_EQ(labels["render"]["seed"], 6);  // --seed plus the variation's index
+  const double pupil = labels["eyes"][0]["pupil_radius_mm"];
+  EXPECT_GE(pupil, 1);
+  EXPECT_LE(pupil, 4);
+
+  const fs::path tracked = output_dir_ / "tracked";
+  ASSERT_EQ(run("track " + quoted(set.string()) + " -o " + quoted(tracked.string()) + " --scene " + scene +
+                " --overlays 2"),
+            0)
+      << err();
+  EXPECT_NE(out().find("tracked 3 images"), std::string::npos) << out();
+  const json score = json::parse(read(tracked / "score.json"));
+  EXPECT_EQ(score["images"], 3);
+  EXPECT_GT(score["glints"]["labelled"].get<int>(), 0);
+  EXPECT_EQ(score["glints"]["found"], score["glints"]["labelled"]);
+  EXPECT_EQ(score["glints"]["false_positives"], 0);
+  EXPECT_EQ(score["glints"]["identity_rate"], 1.0);
+  EXPECT_LT(score["glints"]["error_px"]["max"].get<double>(), 0.5);
+  EXPECT_EQ(score["pupils"]["found"], 3);
+  EXPECT_LT(score["pupils"]["error_px"]["max"].get<double>(), 1.0);
+  EXPECT_FALSE(mentions_non_finite(read(tracked / "score.json")));
+  EXPECT_FALSE(mentions_non_finite(read(tracked / "score.csv")));
+  EXPECT_TRUE(fs::exists(tracked / "score.txt"));
+  std::size_t overlays = 0;
+  for (const auto& e : fs::directory_iterator(tracked / "overlays")) overlays += e.path().extension() == ".png";
+  EXPECT_EQ(overlays, 2u);
+
+  // The same detections, read back as another tracker's: the same score.
+  const fs::path scored = output_dir_ / "scored";
+  ASSERT_EQ(run("score --detections " + quoted((tracked / "detections.csv").string()) + " " + quoted(set.string()) +
+                " -o " + quoted(scored.string())),
+            0)
+      << err();
+  EXPECT_EQ(json::parse(read(scored / "score.json")), score);
+  EXPECT_FALSE(fs::exists(scored / "detections.csv"));
+}
+
+TEST_F(Cli, ScoreNamesTheLineOfAMalformedDetectionAndWritesNothing) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  const fs::path set = output_dir_ / "set";
+  ASSERT_EQ(run("render " + scene + " -o " + quoted(set.string()) + " --edge-samples 0"), 0) << err();
+  const fs::path detections = root_ / "theirs.csv";
+  const fs::path scored = output_dir_ / "scored";
+  std::ofstream(detections) << "image,feature,u_px,v_px\nremote_cam0.png,glint,316.6,239.5\n"
+                               "remote_cam0.png,pupil,317.7,2x4.9\n";
+  EXPECT_EQ(run("score --detections " + quoted(detections.string()) + " " + quoted(set.string()) + " -o " +
+                quoted(scored.string())),
+            1);
+  EXPECT_NE(err().find("theirs.csv:3: column v_px = \"2x4.9\""), std::string::npos) << err();
+  EXPECT_FALSE(fs::exists(scored));
+
+  std::ofstream(detections) << "image,feature,u_px,v_px\nsomewhere_else.png,glint,316.6,239.5\n";
+  EXPECT_EQ(run("score --detections " + quoted(detections.string()) + " " + quoted(set.string()) + " -o " +
+                quoted(scored.string())),
+            1);
+  EXPECT_NE(err().find("somewhere_else.png is not among the labelled images"), std::string::npos) << err();
+
+  // Their detections of one glint only: the other glint and the pupil missed.
+  std::ofstream(detections) << "image,feature,u_px,v_px\nremote_cam0.png,glint,316.6,239.5\n";
+  ASSERT_EQ(run("score --detections " + quoted(detections.string()) + " " + quoted(set.string()) + " -o " +
+                quoted(scored.string())),
+            0)
+      << err();
+  const json score = json::parse(read(scored / "score.json"));
+  EXPECT_EQ(score["glints"]["labelled"], 2);
+  EXPECT_EQ(score["glints"]["found"], 1);
+  EXPECT_EQ(score["pupils"]["labelled"], 1);
+  EXPECT_EQ(score["pupils"]["found"], 0);
+  EXPECT_TRUE(score["glints"]["identity_rate"].is_null());  // no light told
+
+  EXPECT_EQ(run("track " + quoted(root_.string() + "/nowhere") + " -o " + quoted(scored.string())), 1);
+  EXPECT_NE(err().find("nowhere"), std::string::npos) << err();
+}

@@ -4,7 +4,6 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
-#include <iomanip>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -158,10 +157,21 @@ std::map<std::string, Detections> read_detections_csv(const std::filesystem::pat
   return out;
 }
 
+namespace {
+
+// The shortest text that reads back as the same number: scoring the file
+// gives the same figures as scoring the detections.
+std::string exact(double x) {
+  char buffer[32];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, x).ptr;
+  return std::string(buffer, end);
+}
+
+}  // namespace
+
 std::string detections_csv(const std::map<std::string, Detections>& detections) {
   std::ostringstream out;
   out << "image,feature,u_px,v_px,illuminator,semi_axis_1_px,semi_axis_2_px,angle_deg,confidence\n";
-  out << std::setprecision(10);
   const auto quoted = [](const std::string& s) {
     if (s.find_first_of(",\"") == std::string::npos) return s;
     std::string q = "\"";
@@ -170,20 +180,20 @@ std::string detections_csv(const std::map<std::string, Detections>& detections) 
   };
   for (const auto& [image_name, d] : detections) {
     for (const Glint& g : d.glints) {
-      out << quoted(image_name) << ",glint," << g.centre.u << ',' << g.centre.v << ',';
+      out << quoted(image_name) << ",glint," << exact(g.centre.u) << ',' << exact(g.centre.v) << ',';
       if (g.illuminator >= 0) out << g.illuminator;
       out << ",,,,\n";
     }
     for (const PupilFound& p : d.pupils) {
-      out << quoted(image_name) << ",pupil," << p.centre.u << ',' << p.centre.v << ",,";
+      out << quoted(image_name) << ",pupil," << exact(p.centre.u) << ',' << exact(p.centre.v) << ",,";
       if (p.ellipse) {
-        out << p.ellipse->semi_axis_1_px << ',' << p.ellipse->semi_axis_2_px << ','
-            << p.ellipse->angle_rad * 180 / std::numbers::pi;
+        out << exact(p.ellipse->semi_axis_1_px) << ',' << exact(p.ellipse->semi_axis_2_px) << ','
+            << exact(p.ellipse->angle_rad * 180 / std::numbers::pi);
       } else {
         out << ",,";
       }
       out << ',';
-      if (p.confidence) out << *p.confidence;
+      if (p.confidence) out << exact(*p.confidence);
       out << '\n';
     }
   }

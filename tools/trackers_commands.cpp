@@ -1,0 +1,218 @@
+// `purkinje track` and `purkinje score`: detectors run over a labelled image
+// set, or another tracker's detections read, and scored against the labels.
+// Documented in docs/cli.md.
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "purkinje/models/labels.h"
+#include "purkinje/models/scene_file.h"
+#include "purkinje/trackers/detections_file.h"
+#include "purkinje/trackers/glints.h"
+#include "purkinje/trackers/image_file.h"
+#include "purkinje/trackers/pupil.h"
+#include "purkinje/trackers/scoring.h"
+
+namespace purkinje::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct LabelledImage {
+  std::string name;  // the image's file name: how detections files name it
+  ImageLabels labels;
+};
+
+// The labels files the inputs name: a labels file itself, an image beside
+// its labels (same name, .json), or a folder (its .json files, in order).
+std::vector<fs::path> labels_files(const std::vector<std::string>& inputs) {
+  std::vector<fs::path> files;
+  for (const std::string& input : inputs) {
+    const fs::path path(input);
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+      std::vector<fs::path> in_folder;
+      for (const fs::directory_entry& e : fs::directory_iterator(path)) {
+        if (e.is_regular_file() && e.path().extension() == ".json") in_folder.push_back(e.path());
+      }
+      if (in_folder.empty()) throw std::runtime_error(input + ": a folder without labels files (.json)");
+      std::sort(in_folder.begin(), in_folder.end());
+      files.insert(files.end(), in_folder.begin(), in_folder.end());
+    } else if (path.extension() == ".json") {
+      files.push_back(path);
+    } else {
+      files.push_back(fs::path(path).replace_extension(".json"));
+    }
+  }
+  return files;
+}
+
+std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs) {
+  std::vector<LabelledImage> images;
+  std::map<std::string, fs::path> seen;
+  for (const fs::path& file : labels_files(inputs)) {
+    LabelledImage image{"", read_image_labels(file)};
+    image.name = image.labels.image.filename().string();
+    const auto [it, fresh] = seen.emplace(image.name, file);
+    if (!fresh) {
+      throw std::runtime_error(file.string() + ": labels an image named " + image.name + ", as " +
+                               it->second.string() + " does: image names must differ");
+    }
+    images.push_back(std::move(image));
+  }
+  return images;
+}
+
+trackers::GreyImage read_image(const LabelledImage& image) {
+  trackers::GreyImage pixels = trackers::read_grey_image(image.labels.image, image.labels.bits);
+  if (pixels.width != image.labels.width_px || pixels.height != image.labels.height_px) {
+    throw std::runtime_error(image.labels.image.string() + ": " + std::to_string(pixels.width) + " x " +
+                             std::to_string(pixels.height) + " pixels; its labels say " +
+                             std::to_string(image.labels.width_px) + " x " + std::to_string(image.labels.height_px));
+  }
+  return pixels;
+}
+
+// Writes the score's files, the detections (when given) and the worst
+// images' overlays into the output folder, each file all or nothing, and
+// prints the table. The overlays' images are read before anything is
+// written, so that a missing image writes nothing.
+int write_outputs(const char* command, const ScoreOutput& request, const trackers::Score& score,
+                  const std::map<std::string, trackers::Detections>& detections,
+                  const std::vector<LabelledImage>& images, bool with_detections) {
+  struct Overlay {
+    const LabelledImage* image;
+    trackers::GreyImage pixels;
+  };
+  std::vector<Overlay> overlays;
+  try {
+    for (const std::string& name : trackers::worst_images(score, request.overlays)) {
+      const auto it = std::find_if(images.begin(), images.end(), [&](const LabelledImage& i) { return i.name == name; });
+      overlays.push_back({&*it, read_image(*it)});
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje " << command << ": error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  const fs::path dir(request.output_dir);
+  try {
+    std::error_code ec;
+    fs::create_directories(dir / "overlays", ec);
+    if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
+    write_file_atomically(dir / "score.txt", trackers::score_table(score));
+    write_file_atomically(dir / "score.csv", trackers::score_csv(score));
+    write_file_atomically(dir / "score.json", trackers::score_json(score));
+    if (with_detections) write_file_atomically(dir / "detections.csv", trackers::detections_csv(detections));
+    const trackers::Detections none;
+    for (const Overlay& o : overlays) {
+      const auto found = detections.find(o.image->name);
+      trackers::write_overlay(dir / "overlays" / fs::path(o.image->name).replace_extension(".png"), o.pixels,
+                              o.image->labels.views, found == detections.end() ? none : found->second);
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje " << command << ": error: " << error.what() << "\n";
+    return kOutputError;
+  }
+  std::cout << trackers::score_table(score) << "\nwrote " << (dir / "score.txt").string() << ", score.csv, score.json"
+            << (with_detections ? ", detections.csv" : "") << " and " << overlays.size() << " overlays (the worst images)\n";
+  return kOk;
+}
+
+}  // namespace
+
+int run_track(const TrackRequest& request) {
+  std::vector<LabelledImage> images;
+  std::optional<Scene> rig;
+  try {
+    images = read_labels(request.inputs);
+    if (!request.scene_file.empty()) rig = load_scene(request.scene_file);
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje track: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  const trackers::BlobGlintDetector glint_detector;
+  const trackers::StarburstPupilDetector pupil_detector;
+  trackers::Scorer scorer({request.match_radius_px});
+  std::map<std::string, trackers::Detections> detections;
+  std::map<int, std::vector<std::optional<Pixel>>> layouts;  // by camera
+  double seconds = 0;
+  try {
+    for (const LabelledImage& image : images) {
+      const trackers::GreyImage pixels = read_image(image);
+      // Which light made which glint, from where the rig's lights would put
+      // them on its nominal eye.
+      const std::vector<std::optional<Pixel>>* layout = nullptr;
+      if (rig && !image.labels.views.empty()) {
+        const int camera = image.labels.views.front().camera;
+        if (camera >= static_cast<int>(rig->cameras.size()) || rig->eyes.empty() ||
+            image.labels.views.front().glints.size() != rig->illuminators.size()) {
+          throw std::runtime_error(image.labels.image.string() + ": its labels' camera " + std::to_string(camera) +
+                                   " and lights do not match " + request.scene_file);
+        }
+        auto it = layouts.find(camera);
+        if (it == layouts.end()) {
+          it = layouts.emplace(camera, trackers::nominal_glint_layout(rig->cameras[camera], rig->illuminators,
+                                                                      rig->eyes.front())).first;
+        }
+        layout = &it->second;
+      }
+      const auto start = std::chrono::steady_clock::now();
+      trackers::Detections found;
+      found.glints = glint_detector.detect(pixels.view());
+      if (layout) trackers::identify_glints(found.glints, *layout);
+      if (const auto pupil = pupil_detector.detect(pixels.view(), found.glints)) {
+        found.pupils.push_back({pupil->ellipse.center, pupil->ellipse, pupil->confidence});
+      }
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      scorer.add(image.name, image.labels.views, found);
+      detections[image.name] = std::move(found);
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje track: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  std::cout << "tracked " << images.size() << " images: glints and pupil in " << std::fixed << std::setprecision(2)
+            << (images.empty() ? 0.0 : 1e3 * seconds / images.size()) << " ms per image on average"
+            << (rig ? "" : "; no --scene: glints not identified") << "\n"
+            << std::defaultfloat;
+  return write_outputs("track", request, scorer.score(), detections, images, true);
+}
+
+int run_score(const ScoreRequest& request) {
+  std::vector<LabelledImage> images;
+  std::map<std::string, trackers::Detections> detections;
+  trackers::Scorer scorer({request.match_radius_px});
+  try {
+    images = read_labels(request.inputs);
+    detections = trackers::read_detections_csv(request.detections_file);
+    std::set<std::string> names;
+    for (const LabelledImage& image : images) names.insert(image.name);
+    for (const auto& [name, found] : detections) {
+      if (!names.count(name)) {
+        throw std::runtime_error(request.detections_file + ": image " + name +
+                                 " is not among the labelled images given");
+      }
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje score: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  const trackers::Detections none;
+  for (const LabelledImage& image : images) {
+    const auto found = detections.find(image.name);
+    scorer.add(image.name, image.labels.views, found == detections.end() ? none : found->second);
+  }
+  return write_outputs("score", request, scorer.score(), detections, images, false);
+}
+
+}  // namespace purkinje::tools

@@ -48,6 +48,19 @@ Scene with_eye_variation(const Scene& scene, const EyeVariation& v, int eye_inde
                             std::to_string(scene.eyes.size()) + " eyes");
   }
   const Eye& eye = scene.eyes[eye_index];
+  const EyeModel& m = eye.model();
+  const auto fail = [](const std::string& what) { throw std::invalid_argument("EyeVariation: " + what); };
+  if (!std::isfinite(v.gaze_turn_rad) || !std::isfinite(v.turn_direction_rad)) {
+    fail("gaze_turn_rad = " + std::to_string(v.gaze_turn_rad) + ", turn_direction_rad = " +
+         std::to_string(v.turn_direction_rad) + ": must be finite");
+  }
+  // The scene file's rule: the pupil's edge, decentred, within the iris.
+  const double decentration = std::hypot(m.pupil_decentration_x_mm, m.pupil_decentration_y_mm);
+  if (!(v.pupil_radius_mm > 0 && v.pupil_radius_mm + decentration < m.iris_radius_mm)) {
+    fail("pupil_radius_mm = " + std::to_string(v.pupil_radius_mm) + ": must be > 0 and, with the pupil's " +
+         std::to_string(decentration) + " mm decentration, < the iris's radius (" +
+         std::to_string(m.iris_radius_mm) + " mm)");
+  }
   const UnitVector3 gaze = eye.visual_axis();
   const UnitVector3 up = UnitVector3::normalize(eye.appearance().head_up.vector() -
                                                 gaze.vector() * dot(eye.appearance().head_up, gaze));

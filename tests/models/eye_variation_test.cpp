@@ -42,7 +42,11 @@ TEST(EyeVariation, TurnsTheGazeByTheAngleTowardTheDirectionAboutTheRotationCentr
     EXPECT_EQ(turned.cameras.size(), scene.cameras.size());
     EXPECT_EQ(turned.illuminators.size(), scene.illuminators.size());
   }
-  EXPECT_THROW(with_eye_variation(scene, {}, 1), std::out_of_range);
+  EXPECT_THROW(with_eye_variation(scene, {0, 0, 2}, 1), std::out_of_range);
+  // A pupil of no size, or beyond the iris, and a turn that is not a number.
+  EXPECT_THROW(with_eye_variation(scene, {}), std::invalid_argument);
+  EXPECT_THROW(with_eye_variation(scene, {0, 0, eye.model().iris_radius_mm}), std::invalid_argument);
+  EXPECT_THROW(with_eye_variation(scene, {std::nan(""), 0, 2}), std::invalid_argument);
 }
 
 TEST(EyeVariation, DrawsGazeUniformlyOverTheCapAndPupilsWithinTheRange) {

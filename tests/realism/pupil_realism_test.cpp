@@ -68,22 +68,18 @@ int renders_per_scene() {
 // The scene's eye turned and its pupil resized (eye_variation.h): the
 // gaze uniform over the cap within 30 deg of the scene's, the pupil radius
 // uniform in [1, 4] mm.
-struct Variant : EyeVariation {
+struct Variant {
   int index = 0;
+  EyeVariation eye;
 };
 
 std::vector<Variant> variants(std::uint64_t seed, int count) {
   std::vector<Variant> out;
   for (const EyeVariation& e : random_eye_variations(seed, count, {kMaxGazeTurnRad, 1, 4})) {
-    Variant v;
-    static_cast<EyeVariation&>(v) = e;
-    v.index = static_cast<int>(out.size());
-    out.push_back(v);
+    out.push_back({static_cast<int>(out.size()), e});
   }
   return out;
 }
-
-Scene with_variant(const Scene& scene, const Variant& v) { return with_eye_variation(scene, v); }
 
 // The eye region a tracker would crop around the eye before looking for the
 // pupil: the box around the limbus's image, with a margin for the cornea's
@@ -146,8 +142,8 @@ struct Outcome {
 };
 
 Outcome measure(const Scene& scene, const Variant& v, std::uint64_t seed) {
-  const Scene s = with_variant(scene, v);
-  EXPECT_NEAR(angle_between(s.eyes[0].visual_axis(), scene.eyes[0].visual_axis()), v.gaze_turn_rad, 1e-9);
+  const Scene s = with_eye_variation(scene, v.eye);
+  EXPECT_NEAR(angle_between(s.eyes[0].visual_axis(), scene.eyes[0].visual_axis()), v.eye.gaze_turn_rad, 1e-9);
   RenderOptions options;  // default samples per pixel, noise as the scene's sensor says
   options.seed = seed;
   options.region = eye_region(s);
@@ -252,9 +248,9 @@ SceneFigures run_scene(const std::string& name, std::uint64_t variant_seed) {
   // The misses the lids do not explain away, for the closing note.
   for (const Outcome& o : outcomes) {
     if (o.error_px <= 2.0 || o.visibility == Visibility::centre_hidden) continue;
-    std::cout << "  miss: render " << o.variant.index << ", gaze turned " << format(o.variant.gaze_turn_rad * kDegrees)
-              << " deg toward " << format(o.variant.turn_direction_rad * kDegrees) << " deg (0 up, 90 world +x), pupil "
-              << format(o.variant.pupil_radius_mm) << " mm, " << o.hidden_border_points
+    std::cout << "  miss: render " << o.variant.index << ", gaze turned " << format(o.variant.eye.gaze_turn_rad * kDegrees)
+              << " deg toward " << format(o.variant.eye.turn_direction_rad * kDegrees) << " deg (0 up, 90 world +x), pupil "
+              << format(o.variant.eye.pupil_radius_mm) << " mm, " << o.hidden_border_points
               << "/36 border points under a lid: " << (o.found ? format(o.error_px) + " px" : "not found") << "\n";
   }
   return f;
@@ -287,7 +283,7 @@ TEST(PupilRealism, HeadsetScene) { expect_realism(run_scene("headset", 2)); }
 // full render, noise included.
 TEST(PupilRealism, EyeRegionCropMatchesFullRender) {
   for (const char* name : {"remote", "headset"}) {
-    const Scene scene = with_variant(bundled(name), variants(3, 1).front());
+    const Scene scene = with_eye_variation(bundled(name), variants(3, 1).front().eye);
     RenderOptions options;
     options.seed = 7;
     options.region = eye_region(scene);

@@ -44,7 +44,13 @@ void expect_pupils_found(const std::string& name, std::uint64_t seed) {
     errors.push_back(std::hypot(pupil->ellipse.center.u - label.ellipse.center.u,
                                 pupil->ellipse.center.v - label.ellipse.center.v));
     EXPECT_LT(errors.back(), 1.0) << "render " << index - 1;
-    EXPECT_GT(pupil->confidence, 0.3);
+    // Where no lid hides the pupil, nearly all of its outline is found
+    // (glints on it leave their sectors to the rays beside them).
+    const bool whole = std::none_of(label.border.begin(), label.border.end(),
+                                    [](const PupilBorderPointTruth& b) { return b.status == PathStatus::occluded; });
+    if (whole) {
+      EXPECT_GT(pupil->confidence, 0.8) << "render " << index - 1;
+    }
   }
   std::sort(errors.begin(), errors.end());
   const double median = errors[errors.size() / 2];

@@ -139,6 +139,7 @@ std::vector<Blob> label_blobs(const cv::Mat& mask, cv::Mat& labels, std::vector<
 struct Scratch {
   cv::Mat grey, above_int, above, blobs, labels;
   std::vector<cv::Point> seeds, stack;
+  std::vector<float> around;
 };
 Scratch& scratch_for(const cv::Size& size) {
   thread_local Scratch scratch;
@@ -219,12 +220,41 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
     surroundings &= ~weighed & ~blobs(window);  // other glints nearby are not the background
     // A glint stands out from all around it: a small bright part of a
     // larger bright region (the rim of a bright patch, which the opening's
-    // square cannot reach into) does not.
-    double around_max = 0;
-    cv::minMaxLoc(grey(window), nullptr, &around_max, nullptr, nullptr, surroundings);
+    // square cannot reach into, or a lit lid margin) does not. What stands
+    // out is what is joined to the peak above the level halfway between
+    // the peak and the middle of its surroundings: it must stay within the
+    // blob's margin. (Brighter things nearby but apart, such as a
+    // saturated sclera beside a glint on the iris, do not matter.)
     double blob_max = 0;
-    cv::minMaxLoc(grey(window), nullptr, &blob_max, nullptr, nullptr, blob);
-    if (blob_max - around_max < 0.5 * threshold) continue;
+    cv::Point brightest_at;
+    cv::minMaxLoc(grey(window), nullptr, &blob_max, nullptr, &brightest_at, blob);
+    std::vector<float>& around = scratch.around;
+    around.clear();
+    for (int y = 0; y < window.height; ++y) {
+      for (int x = 0; x < window.width; ++x) {
+        if (surroundings.at<std::uint8_t>(y, x)) around.push_back(grey(window).at<float>(y, x));
+      }
+    }
+    if (around.empty()) continue;
+    std::nth_element(around.begin(), around.begin() + around.size() / 2, around.end());
+    const double around_level = around[around.size() / 2];
+    // Above its surroundings' middle by the threshold, too: the iris's
+    // texture beside the dark pupil rises above the opening's background,
+    // but hardly above the iris around it.
+    if (blob_max - around_level < threshold) continue;
+    cv::Mat joined;
+    cv::connectedComponents(grey(window) > 0.5 * (blob_max + around_level), joined, 8, CV_32S);
+    const int peak_part = joined.at<int>(brightest_at);
+    bool spills = false;
+    for (int y = 0; y < window.height && !spills; ++y) {
+      for (int x = 0; x < window.width; ++x) {
+        if (surroundings.at<std::uint8_t>(y, x) && joined.at<int>(y, x) == peak_part) {
+          spills = true;
+          break;
+        }
+      }
+    }
+    if (spills) continue;
     // The top-hat's own level around the glint (noise leaves it above
     // zero) is taken off the weights, so that the ring's noise does not
     // pull the centroid toward the ring's middle.

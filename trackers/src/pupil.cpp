@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstdint>
-#include <tuple>
+#include <tuple>  // std::tie
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -43,12 +43,15 @@ double noise_of(const cv::Mat& image) {
 // Where the pupil may be, on the image shrunk so that the smallest pupil
 // is still 3 pixels wide: the darkest pixels (within a small step of the
 // darkest 3 x 3 mean, above the noise), in 8-connected regions, each
-// region's deepest point and the largest disc about it, largest first. A
+// region's deepest point and the largest disc about it, widest first. A
 // pupil is the darkest thing in an eye image but need not be much darker
 // than the iris around it (3% of full scale in the remote scene), so the
 // step is small; a region of the pupil and something dark it touches
 // (a lid's shadow) has its deepest point in the pupil, the wider of the
-// two.
+// two. Regions that touch the image's border are no pupils (one cut by the
+// border cannot be fit) but may be darker: vignetted corners, a headset
+// lens's black rim. When every region at the darkest level touches the
+// border, the darkest level is sought again without them.
 std::vector<DarkBlob> dark_blobs(const cv::Mat& image, const StarburstPupilSettings& s, double full_scale) {
   const int f = std::max(1, static_cast<int>(std::floor(s.min_radius_px / 1.5)));
   const int cols = image.cols / f, rows = image.rows / f;
@@ -61,36 +64,53 @@ std::vector<DarkBlob> dark_blobs(const cv::Mat& image, const StarburstPupilSetti
     cv::resize(image(cv::Rect(0, 0, cols * f, rows * f)), area, {cols, rows}, 0, 0, cv::INTER_AREA);
     area.convertTo(small, CV_32F);
   }
+  cv::min(small, full_scale, small);  // larger values are saturated too
+  const double step = std::max(s.min_contrast * full_scale, 3 * noise_of(small));  // before the opening flattens it
   // Glints in or on a small pupil would lift its mean: an opening takes
   // away what is bright and narrower than the smallest pupil.
   const int reach = static_cast<int>(std::ceil(s.min_radius_px / f));
   cv::morphologyEx(small, small, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_RECT, {2 * reach + 1, 2 * reach + 1}));
   cv::Mat mean3;
   cv::blur(small, mean3, {3, 3}, {-1, -1}, cv::BORDER_REPLICATE);
-  double darkest = 0;
-  cv::minMaxLoc(mean3, &darkest);
-  const double step = std::max(s.min_contrast * full_scale, 3 * noise_of(small));
-  cv::Mat dark;
-  cv::compare(mean3, darkest + step, dark, cv::CMP_LE);
-  cv::Mat depth;  // distance to the nearest pixel not dark
-  cv::distanceTransform(dark, depth, cv::DIST_L2, cv::DIST_MASK_5);
-  cv::Mat regions;
-  const int count = cv::connectedComponents(dark, regions, 8, CV_32S);
-  std::vector<DarkBlob> deepest(count, DarkBlob{{0, 0}, 0});
-  for (int y = 0; y < rows; ++y) {
-    const int* region = regions.ptr<int>(y);
-    const float* d = depth.ptr<float>(y);
-    for (int x = 0; x < cols; ++x) {
-      if (region[x] > 0 && d[x] > deepest[region[x]].radius_px) deepest[region[x]] = {{double(x), double(y)}, d[x]};
-    }
-  }
+
   std::vector<DarkBlob> blobs;
-  for (int k = 1; k < count; ++k) {
-    const DarkBlob& b = deepest[k];
-    // Shrunk pixel x covers full-size pixels x f to x f + f - 1.
-    blobs.push_back({{b.centre.u * f + 0.5 * (f - 1), b.centre.v * f + 0.5 * (f - 1)}, b.radius_px * f});
+  cv::Mat at_border = cv::Mat::zeros(rows, cols, CV_8U);  // dark regions found touching the border
+  for (int round = 0; round < 4 && blobs.empty(); ++round) {
+    double darkest = 0;
+    cv::minMaxLoc(mean3, &darkest, nullptr, nullptr, nullptr, at_border == 0);
+    cv::Mat dark;
+    cv::compare(mean3, darkest + step, dark, cv::CMP_LE);
+    dark &= at_border == 0;
+    cv::Mat depth;  // distance to the nearest pixel not dark
+    cv::distanceTransform(dark, depth, cv::DIST_L2, cv::DIST_MASK_5);
+    cv::Mat regions, boxes, centroids;
+    const int count = cv::connectedComponentsWithStats(dark, regions, boxes, centroids, 8, CV_32S);
+    std::vector<DarkBlob> deepest(count, DarkBlob{{0, 0}, 0});
+    for (int y = 0; y < rows; ++y) {
+      const int* region = regions.ptr<int>(y);
+      const float* d = depth.ptr<float>(y);
+      for (int x = 0; x < cols; ++x) {
+        if (region[x] > 0 && d[x] > deepest[region[x]].radius_px) deepest[region[x]] = {{double(x), double(y)}, d[x]};
+      }
+    }
+    for (int k = 1; k < count; ++k) {
+      const int x0 = boxes.at<int>(k, cv::CC_STAT_LEFT), y0 = boxes.at<int>(k, cv::CC_STAT_TOP);
+      const int x1 = x0 + boxes.at<int>(k, cv::CC_STAT_WIDTH), y1 = y0 + boxes.at<int>(k, cv::CC_STAT_HEIGHT);
+      if (x0 == 0 || y0 == 0 || x1 == cols || y1 == rows) {
+        at_border |= regions == k;
+        continue;
+      }
+      const DarkBlob& b = deepest[k];
+      // Shrunk pixel x covers full-size pixels x f to x f + f - 1.
+      blobs.push_back({{b.centre.u * f + 0.5 * (f - 1), b.centre.v * f + 0.5 * (f - 1)}, b.radius_px * f});
+    }
+    if (static_cast<std::size_t>(cv::countNonZero(at_border)) == at_border.total()) break;
   }
-  std::sort(blobs.begin(), blobs.end(), [](const DarkBlob& a, const DarkBlob& b) { return a.radius_px > b.radius_px; });
+  // Widest first; ties by place, so that the same image gives the same
+  // candidates with any standard library.
+  std::sort(blobs.begin(), blobs.end(), [](const DarkBlob& a, const DarkBlob& b) {
+    return std::tie(b.radius_px, a.centre.v, a.centre.u) < std::tie(a.radius_px, b.centre.v, b.centre.u);
+  });
   if (static_cast<int>(blobs.size()) > s.candidates) blobs.resize(s.candidates);
   return blobs;
 }
@@ -152,19 +172,19 @@ std::optional<ConicEllipse> ellipse_of(const Conic& q) {
   return ConicEllipse{x0, y0, std::sqrt(k / lo), std::sqrt(k / hi)};
 }
 
-// How much of an outline the edge points on it cover: of 32 equal sectors
-// about its centre, those with a point on the outline. A count of points
-// would favour outlines near where the rays start (their points are
-// densest there): an ellipse through the near half of a pupil and the
-// middle of a lid's edge across it can have more points than the pupil's
-// own, but covers less of its outline.
+// How much of an outline the edge points on it cover, the confidence: of
+// 32 equal sectors about its centre, those with a point on the outline.
+// (A count of points would depend on where the rays start: they are
+// densest on the part of the outline nearest to it.)
 constexpr int kSectors = 32;
 class Coverage {
  public:
   Coverage(double x0, double y0) : x0_(x0), y0_(y0) {}
   void add(double x, double y) {
-    const double t = std::atan2(y - y0_, x - x0_) * (kSectors / (2 * std::numbers::pi)) + kSectors / 2;
-    sectors_ |= 1u << std::clamp(static_cast<int>(t), 0, kSectors - 1);
+    // Sectors start half a sector off the rays' directions (multiples of
+    // 2 pi / 32 for 32 or 64 rays), so that no ray lies on a boundary.
+    const double t = std::atan2(y - y0_, x - x0_) * (kSectors / (2 * std::numbers::pi)) + kSectors / 2 + 0.5;
+    sectors_ |= 1u << (static_cast<int>(t) % kSectors);
   }
   int sectors() const { return std::popcount(sectors_); }
 
@@ -183,9 +203,9 @@ struct Fit {
   double score() const { return confidence() * std::sqrt(ellipse.semi_axis_2_px); }
 };
 
-class Finder {
+class StarburstFit {
  public:
-  Finder(const cv::Mat& image, std::span<const Glint> glints, const StarburstPupilSettings& s, double full_scale)
+  StarburstFit(const cv::Mat& image, std::span<const Glint> glints, const StarburstPupilSettings& s, double full_scale)
       : image_(image), s_(s), full_scale_(full_scale) {
     for (const Glint& g : glints) {
       const double r = std::sqrt(std::max(1, g.area_px) / std::numbers::pi) + s.glint_margin_px;
@@ -195,7 +215,7 @@ class Finder {
   }
 
   // The pupil about a coarse centre and radius: two rounds of rays and fits.
-  std::optional<Fit> fit(Pixel centre, double radius) {
+  std::optional<Fit> about(Pixel centre, double radius) {
     std::optional<Fit> found;
     for (int round = 0; round < 2; ++round) {
       if (!cast_rays(centre, radius)) return found;
@@ -215,7 +235,8 @@ class Finder {
     if (x < 0 || y < 0 || x + 1 >= image_.cols || y + 1 >= image_.rows) return false;
     const double fx = u - x, fy = v - y;
     const auto at = [&](int yy, int xx) -> double {
-      return image_.depth() == CV_8U ? image_.at<std::uint8_t>(yy, xx) : image_.at<std::uint16_t>(yy, xx);
+      const double v = image_.depth() == CV_8U ? image_.at<std::uint8_t>(yy, xx) : image_.at<std::uint16_t>(yy, xx);
+      return std::min(v, full_scale_);  // larger values are saturated too
     };
     const double top = at(y, x) + fx * (at(y, x + 1) - at(y, x));
     const double bottom = at(y + 1, x) + fx * (at(y + 1, x + 1) - at(y + 1, x));
@@ -257,11 +278,13 @@ class Finder {
       std::nth_element(v.begin(), v.begin() + k, v.end());
       return v[k];
     };
-    quantile(inside, 0.5);
+    quantile(inside, 0.5);  // partitions: the darker half first
     inside.resize(inside.size() / 2);
     const double pupil = quantile(inside, 0.5);
     for (double& v : inside) v = std::abs(v - pupil);
-    const double noise = 1.4826 * quantile(inside, 0.5);
+    // For Gaussian noise of deviation sigma, the darker half's median
+    // absolute deviation from its median is 0.40 sigma.
+    const double noise = 2.50 * quantile(inside, 0.5);
     // A rise above the noise, and by at least the least contrast.
     const double step = std::max(s_.min_contrast * full_scale_, 5 * noise);
     // The first rise above the noise may be a faint one (light scattered
@@ -270,24 +293,24 @@ class Finder {
     // sought is half of that. (Rays into a lid reach higher, but start
     // their search only where the ray is dark: from a centre by a lid's
     // edge, those toward the lid find no pupil.)
-    std::vector<double> reached;
+    std::vector<double> rises;  // to the level beyond each ray's first rise, from the pupil's
     for (int k = 0; k < s_.rays; ++k) {
-      double level = 0;
-      if (edge_along(&profiles_[static_cast<std::size_t>(k) * n], n, pupil, pupil + step, step, level)) {
-        reached.push_back(level - pupil);
+      double beyond = 0;
+      if (edge_along(&profiles_[static_cast<std::size_t>(k) * n], n, pupil, pupil + step, step, beyond)) {
+        rises.push_back(beyond - pupil);
       }
     }
-    if (reached.size() < 6) return false;
-    const double iris = pupil + quantile(reached, 0.5);
+    if (rises.size() < 6) return false;
+    const double iris = pupil + quantile(rises, 0.5);
     const double rise = pupil + std::max(step, 0.5 * (iris - pupil));
-    reached.clear();
+    std::vector<double> beyond_edges;  // the level beyond each edge point
     for (int k = 0; k < s_.rays; ++k) {
       const double* p = &profiles_[static_cast<std::size_t>(k) * n];
       const double t = 2 * std::numbers::pi * k / s_.rays;
       double level = 0;
       if (const auto s = edge_along(p, n, pupil, rise, step, level)) {
         edges_.push_back({centre.u + *s * std::cos(t), centre.v + *s * std::sin(t)});
-        reached.push_back(level);
+        beyond_edges.push_back(level);
       }
     }
     // A rise to far brighter than the iris is to a lid's skin (or an
@@ -297,7 +320,7 @@ class Finder {
     const double too_bright = iris + 0.5 * (iris - pupil);
     std::size_t kept = 0;
     for (std::size_t i = 0; i < edges_.size(); ++i) {
-      if (reached[i] <= too_bright) edges_[kept++] = edges_[i];
+      if (beyond_edges[i] <= too_bright) edges_[kept++] = edges_[i];
     }
     edges_.resize(kept);
     return edges_.size() >= 6;
@@ -447,7 +470,9 @@ StarburstPupilDetector::StarburstPupilDetector(const StarburstPupilSettings& s) 
          ": must satisfy 1 <= min_radius_px <= max_radius_px <= 1000");
   }
   if (s.candidates < 1 || s.candidates > 20) fail("candidates = " + std::to_string(s.candidates) + ": must be in [1, 20]");
-  if (s.rays < 8 || s.rays > 1024) fail("rays = " + std::to_string(s.rays) + ": must be in [8, 1024]");
+  if (s.rays < kSectors || s.rays > 1024) {
+    fail("rays = " + std::to_string(s.rays) + ": must be in [32, 1024] (the confidence counts 32 sectors)");
+  }
   if (s.ransac_iterations < 1 || s.ransac_iterations > 100000) {
     fail("ransac_iterations = " + std::to_string(s.ransac_iterations) + ": must be in [1, 100000]");
   }
@@ -467,10 +492,10 @@ StarburstPupilDetector::StarburstPupilDetector(const StarburstPupilSettings& s) 
 std::optional<PupilDetection> StarburstPupilDetector::detect(const GreyView& view, std::span<const Glint> glints) const {
   const cv::Mat image = mat_of(view, "StarburstPupilDetector");
   const double full_scale = std::ldexp(1.0, view.bits) - 1;
-  Finder finder(image, glints, settings_, full_scale);
+  StarburstFit fit(image, glints, settings_, full_scale);
   std::optional<Fit> best;
   for (const DarkBlob& blob : dark_blobs(image, settings_, full_scale)) {
-    const std::optional<Fit> f = finder.fit(blob.centre, blob.radius_px);
+    const std::optional<Fit> f = fit.about(blob.centre, blob.radius_px);
     if (f && f->confidence() >= settings_.min_confidence && (!best || f->score() > best->score())) best = f;
   }
   if (!best) return std::nullopt;

@@ -33,7 +33,9 @@ std::vector<EyeVariation> random_eye_variations(std::uint64_t seed, int count, c
 // (about an axis perpendicular to the gaze: Listing's law with the scene's
 // gaze as the primary position) and its pupil resized; the lids follow the
 // turned eye (appearance.h), everything else is unchanged. Throws
-// std::out_of_range for an eye the scene does not have.
+// std::out_of_range for an eye the scene does not have, and
+// std::invalid_argument for a turn that is not finite or a pupil that is
+// not within the iris (as the scene file's rule), naming the field.
 Scene with_eye_variation(const Scene& scene, const EyeVariation& variation, int eye = 0);
 
 }  // namespace purkinje

@@ -16,7 +16,7 @@ namespace purkinje::trackers {
 // the image's edges support.
 struct PupilDetection {
   Ellipse ellipse;        // semi-axis 1 is the major one
-  double confidence = 0;  // in [0, 1]: the share of the outline found on the ellipse
+  double confidence = 0;  // in [0, 1]: the share of the outline's sectors with edge points on the ellipse
 };
 
 // A pupil detector (strategy): purkinje's detectors and users' are scored
@@ -35,28 +35,29 @@ class PupilDetector {
 // (Li, Winfield and Parkhurst 2005):
 //  1. on the image shrunk so that the smallest pupil is still 3 pixels
 //     wide, with glints opened away: the darkest regions (within a small
-//     step of the darkest level, above the noise), each one's deepest
-//     point and the largest disc about it, widest first;
-//  2. from each such point, rays outward; on each, the first rise from
-//     the pupil's level to the level the rays mostly reach, located to a
-//     fraction of a pixel where the profile crosses halfway between its
-//     two sides (a symmetric blur moves neither), and dropped where a
-//     glint lies on it;
+//     step of the darkest level, above the noise) that do not touch the
+//     image's border, each one's deepest point and the largest disc about
+//     it, widest first;
+//  2. from each such point, rays outward; on each, from where it is dark,
+//     the first rise to halfway between the pupil's level and the iris's
+//     (the level most rays reach), located to a fraction of a pixel where
+//     the profile crosses halfway between its two sides (a symmetric blur
+//     moves neither), and dropped where a glint lies on it or where it
+//     rises to far brighter than the iris (a lid's skin);
 //  3. RANSAC ellipses through five of those edge points, the one most
-//     points lie on (a lid's edge or a glint's is a minority), then a
-//     least-squares ellipse through those points;
+//     points lie on, then a least-squares ellipse through those points;
 //  4. rays cast again from that ellipse's centre, and steps 2 and 3 again.
-// The confidence is the share of rays whose edge point lies on the final
-// ellipse: about the share of the outline that no lid or glint hides. Of
-// the candidates, the widest well-outlined one wins (confidence times the
-// square root of the minor semi-axis): the shadows in the eye's corners
-// and along the lids can be as well outlined as the pupil, but are
-// narrow.
+// The confidence is the share of 32 sectors about the ellipse's centre
+// that hold an edge point on it: about the share of the outline that no
+// lid or glint hides. Of the candidates, the widest well-outlined one wins
+// (confidence times the square root of the minor semi-axis): the shadows
+// in the eye's corners and along the lids can be as well outlined as the
+// pupil, but are narrow.
 struct StarburstPupilSettings {
   double min_radius_px = 3;    // the pupil's semi-axes lie in [min, max]
   double max_radius_px = 80;
-  int candidates = 3;          // dark blobs tried, most contrasted first
-  int rays = 64;
+  int candidates = 3;          // dark regions tried, widest first
+  int rays = 64;               // at least 32
   int ransac_iterations = 100;
   double inlier_px = 0.75;     // an edge point this close to the ellipse lies on it
   double min_axis_ratio = 0.25;   // minor / major: a pupil seen up to 75 deg off its axis

@@ -13,6 +13,7 @@
 
 #include "purkinje/models/optimizer.h"
 #include "purkinje/models/specular.h"
+#include "blobs.h"
 #include "grey_mat.h"
 
 namespace purkinje::trackers {
@@ -91,48 +92,6 @@ bool fit_spot(const std::vector<SpotPixel>& pixels, Pixel& centre, double& energ
   return true;
 }
 
-// The 8-connected blobs of a sparse mask, numbered from 1 in `labels`:
-// from its non-zero pixels only, since cv::connectedComponentsWithStats
-// scans the whole image at some length (1.1 ms for 640 x 480, a third of a
-// frame's budget).
-struct Blob {
-  int area = 0;
-  cv::Rect box;
-};
-// `labels` must be zero where `mask` is set (see Scratch); `seeds` are
-// left holding the mask's pixels.
-std::vector<Blob> label_blobs(const cv::Mat& mask, cv::Mat& labels, std::vector<cv::Point>& seeds,
-                              std::vector<cv::Point>& stack) {
-  cv::findNonZero(mask, seeds);
-  std::vector<Blob> blobs(1);  // blob 0: the background
-  for (const cv::Point& seed : seeds) {
-    if (labels.at<int>(seed) != 0) continue;
-    const int label = static_cast<int>(blobs.size());
-    Blob blob;
-    int u0 = seed.x, u1 = seed.x, v0 = seed.y, v1 = seed.y;
-    labels.at<int>(seed) = label;
-    stack.assign(1, seed);
-    while (!stack.empty()) {
-      const cv::Point p = stack.back();
-      stack.pop_back();
-      ++blob.area;
-      u0 = std::min(u0, p.x), u1 = std::max(u1, p.x), v0 = std::min(v0, p.y), v1 = std::max(v1, p.y);
-      for (int dv = -1; dv <= 1; ++dv) {
-        for (int du = -1; du <= 1; ++du) {
-          const cv::Point q(p.x + du, p.y + dv);
-          if (q.x < 0 || q.y < 0 || q.x >= mask.cols || q.y >= mask.rows) continue;
-          if (!mask.at<std::uint8_t>(q) || labels.at<int>(q) != 0) continue;
-          labels.at<int>(q) = label;
-          stack.push_back(q);
-        }
-      }
-    }
-    blob.box = cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1);
-    blobs.push_back(blob);
-  }
-  return blobs;
-}
-
 // Images of a frame's size, kept per thread from frame to frame: fresh
 // ones cost a page fault per 4 KB, as much as the detection itself.
 // `labels` is all zeros between frames.
@@ -192,12 +151,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
   // Zeros again for the next frame, however this one ends (the seeds are
   // this frame's from here on).
   scratch.seeds.clear();
-  struct ClearLabels {
-    Scratch& s;
-    ~ClearLabels() {
-      for (const cv::Point& p : s.seeds) s.labels.at<int>(p) = 0;
-    }
-  } clear_labels{scratch};
+  const ClearLabels clear_labels(labels, scratch.seeds);
   const std::vector<Blob> found = label_blobs(blobs, labels, scratch.seeds, scratch.stack);
   const int count = static_cast<int>(found.size());
 

@@ -251,6 +251,19 @@ int run_render(const RenderRequest& request) {
   return kOk;
 }
 
+// The inputs and outputs `track` and `score` share.
+void add_score_output_options(CLI::App& command, purkinje::tools::ScoreOutput& request) {
+  command.add_option("INPUTS", request.inputs, "Labels files, images or folders")->required();
+  command.add_option("-o,--output", request.output_dir, "Output folder (created if missing)")->required();
+  command.add_option("--overlays", request.overlays, "Draw this many of the worst images")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  command.add_option("--match-radius", request.match_radius_px,
+                     "A detection within this many pixels of a label is paired with it")
+      ->check(CLI::Range(0.001, 1000.0))
+      ->capture_default_str();
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"purkinje: physically based simulator of eye-tracker cameras"};
   app.set_version_flag("--version", std::string("purkinje ") + PURKINJE_VERSION);
@@ -336,18 +349,10 @@ int run(int argc, char** argv) {
                             "their labels, or folders of them. Writes DIR/score.txt, score.csv, score.json,\n"
                             "detections.csv and overlays/ (docs/cli.md, docs/trackers.md).\n\n") +
                 kExitCodes);
-  track->add_option("INPUTS", track_request.inputs, "Labels files, images or folders")->required();
-  track->add_option("-o,--output", track_request.output_dir, "Output folder (created if missing)")->required();
+  add_score_output_options(*track, track_request);
   track->add_option("--scene", track_request.scene_file,
                     "Scene file of the tracker's rig and nominal eye: glints are identified\n"
                     "from where its lights put them (default: glints not identified)");
-  track->add_option("--overlays", track_request.overlays, "Draw this many of the worst images")
-      ->check(CLI::Range(0, 100000))
-      ->capture_default_str();
-  track->add_option("--match-radius", track_request.match_radius_px,
-                    "A detection within this many pixels of a label is paired with it")
-      ->check(CLI::Range(0.001, 1000.0))
-      ->capture_default_str();
 
   purkinje::tools::ScoreRequest score_request;
   CLI::App* score = app.add_subcommand(
@@ -358,15 +363,7 @@ int run(int argc, char** argv) {
                             "and overlays/.\n\n") +
                 kExitCodes);
   score->add_option("--detections", score_request.detections_file, "Detections file (CSV)")->required();
-  score->add_option("INPUTS", score_request.inputs, "Labels files, images or folders")->required();
-  score->add_option("-o,--output", score_request.output_dir, "Output folder (created if missing)")->required();
-  score->add_option("--overlays", score_request.overlays, "Draw this many of the worst images")
-      ->check(CLI::Range(0, 100000))
-      ->capture_default_str();
-  score->add_option("--match-radius", score_request.match_radius_px,
-                    "A detection within this many pixels of a label is paired with it")
-      ->check(CLI::Range(0.001, 1000.0))
-      ->capture_default_str();
+  add_score_output_options(*score, score_request);
 
   try {
     app.parse(argc, argv);

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "csv.h"
+
 namespace purkinje::trackers {
 
 namespace {
@@ -172,20 +174,14 @@ std::string exact(double x) {
 std::string detections_csv(const std::map<std::string, Detections>& detections) {
   std::ostringstream out;
   out << "image,feature,u_px,v_px,illuminator,semi_axis_1_px,semi_axis_2_px,angle_deg,confidence\n";
-  const auto quoted = [](const std::string& s) {
-    if (s.find_first_of(",\"") == std::string::npos) return s;
-    std::string q = "\"";
-    for (const char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-  };
   for (const auto& [image_name, d] : detections) {
     for (const Glint& g : d.glints) {
-      out << quoted(image_name) << ",glint," << exact(g.centre.u) << ',' << exact(g.centre.v) << ',';
+      out << csv_cell(image_name) << ",glint," << exact(g.centre.u) << ',' << exact(g.centre.v) << ',';
       if (g.illuminator >= 0) out << g.illuminator;
       out << ",,,,\n";
     }
     for (const PupilFound& p : d.pupils) {
-      out << quoted(image_name) << ",pupil," << exact(p.centre.u) << ',' << exact(p.centre.v) << ",,";
+      out << csv_cell(image_name) << ",pupil," << exact(p.centre.u) << ',' << exact(p.centre.v) << ",,";
       if (p.ellipse) {
         out << exact(p.ellipse->semi_axis_1_px) << ',' << exact(p.ellipse->semi_axis_2_px) << ','
             << exact(p.ellipse->angle_rad * 180 / std::numbers::pi);

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "csv.h"
+
 namespace purkinje::trackers {
 
 const char* to_string(Feature f) { return f == Feature::glint ? "glint" : "pupil"; }
@@ -263,19 +265,13 @@ std::string score_table(const Score& score) {
 std::string score_csv(const Score& score) {
   std::ostringstream out;
   out << "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity\n";
-  const auto quoted = [](const std::string& s) {
-    if (s.find_first_of(",\"\n") == std::string::npos) return s;
-    std::string q = "\"";
-    for (const char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-  };
   const auto number = [](double x) {
     std::ostringstream s;
     s << std::setprecision(10) << x;
     return s.str();
   };
   for (const FeatureScore& f : score.features) {
-    out << quoted(f.image) << ',' << to_string(f.feature) << ',' << (f.eye >= 0 ? std::to_string(f.eye) : "")
+    out << csv_cell(f.image) << ',' << to_string(f.feature) << ',' << (f.eye >= 0 ? std::to_string(f.eye) : "")
         << ',' << (f.illuminator >= 0 ? std::to_string(f.illuminator) : "") << ',' << to_string(f.outcome) << ','
         << (f.label ? number(f.label->u) + ',' + number(f.label->v) : ",") << ','
         << (f.detection ? number(f.detection->u) + ',' + number(f.detection->v) : ",") << ','

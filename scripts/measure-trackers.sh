@@ -3,7 +3,7 @@
 # (gaze within 30 deg of the scene's, pupil radius 1 to 4 mm, default
 # noise) and the hard set (100 renders per condition), tracked by
 # purkinje's detectors and scored against their labels. The figures are
-# recorded in docs/trackers.md, "The bars". About 25 minutes on 2 cores.
+# recorded in docs/trackers.md, "The bars". About 10 minutes on 2 cores.
 #
 #   bash scripts/measure-trackers.sh [OUT]      (default OUT: out/trackers-bars)
 #

@@ -30,30 +30,34 @@ class Reader {
     throw std::runtime_error(text + ": " + rule);
   }
 
+  static std::string join(const std::string& path, const char* key) { return path.empty() ? key : path + "." + key; }
+
   const json& member(const json& object, const std::string& path, const char* key) const {
     const auto it = object.find(key);
-    if (it == object.end()) fail(path + "." + key, nullptr, "missing");
+    if (it == object.end()) {
+      fail(join(path, key), nullptr, "missing (a labels file of `purkinje render`, docs/labels.md)");
+    }
     return *it;
   }
   const json& array(const json& object, const std::string& path, const char* key) const {
     const json& v = member(object, path, key);
-    if (!v.is_array()) fail(path + "." + key, &v, "must be an array");
+    if (!v.is_array()) fail(join(path, key), &v, "must be an array");
     return v;
   }
   const json& object(const json& parent, const std::string& path, const char* key) const {
     const json& v = member(parent, path, key);
-    if (!v.is_object()) fail(path + "." + key, &v, "must be an object");
+    if (!v.is_object()) fail(join(path, key), &v, "must be an object");
     return v;
   }
   double number(const json& object, const std::string& path, const char* key) const {
     const json& v = member(object, path, key);
-    if (!v.is_number() || !std::isfinite(v.get<double>())) fail(path + "." + key, &v, "must be a finite number");
+    if (!v.is_number() || !std::isfinite(v.get<double>())) fail(join(path, key), &v, "must be a finite number");
     return v.get<double>();
   }
   int integer(const json& object, const std::string& path, const char* key, int lo, int hi) const {
     const json& v = member(object, path, key);
     if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi) {
-      fail(path + "." + key, &v, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      fail(join(path, key), &v, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     }
     return static_cast<int>(v.get<long long>());
   }

@@ -85,7 +85,7 @@ TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
   expect_error(j, "views[0].glints[0].illuminator = 7", "integer in [0, 1]");
   j = good;
   j.erase("render");
-  expect_error(j, ".render", "missing");
+  expect_error(j, ": render: missing", "labels file of `purkinje render`");
   j = good;
   j["render"]["sensor"]["bits"] = 20;
   expect_error(j, "render.sensor.bits = 20", "[1, 16]");

@@ -247,8 +247,8 @@ class StarburstFit {
     if (x < 0 || y < 0 || x + 1 >= image_.cols || y + 1 >= image_.rows) return false;
     const double fx = u - x, fy = v - y;
     const auto at = [&](int yy, int xx) -> double {
-      const double v = image_.depth() == CV_8U ? image_.at<std::uint8_t>(yy, xx) : image_.at<std::uint16_t>(yy, xx);
-      return std::min(v, full_scale_);  // larger values are saturated too
+      const double dn = image_.depth() == CV_8U ? image_.at<std::uint8_t>(yy, xx) : image_.at<std::uint16_t>(yy, xx);
+      return std::min(dn, full_scale_);  // larger values are saturated too
     };
     const double top = at(y, x) + fx * (at(y, x + 1) - at(y, x));
     const double bottom = at(y + 1, x) + fx * (at(y + 1, x + 1) - at(y + 1, x));

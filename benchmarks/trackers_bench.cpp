@@ -17,6 +17,7 @@
 #include "purkinje/trackers/cornea.h"
 #include "purkinje/trackers/glints.h"
 #include "purkinje/trackers/pupil.h"
+#include "purkinje/trackers/scoring.h"
 
 namespace purkinje::trackers {
 namespace {
@@ -84,15 +85,7 @@ BENCHMARK(BM_TrackersHeadset)->Unit(benchmark::kMillisecond);
 // issue's bar: at most 20 us), from a start 3.9 mm off.
 void cornea_center(benchmark::State& state, const std::string& name) {
   const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
-  std::vector<Glint> glints;
-  const SceneTruth truth = compute_truth(scene);
-  for (const GlintTruth& g : truth.views.at(0).glints) {
-    if (g.status != PathStatus::ok) continue;
-    Glint found;
-    found.centre = g.pixel;
-    found.illuminator = g.illuminator;
-    glints.push_back(found);
-  }
+  const std::vector<Glint> glints = exact_detections(compute_truth(scene).views).glints;
   const Point3 start = scene.eyes[0].cornea_center() + Vector3{2, -1.5, 3};
   for (auto _ : state) {
     benchmark::DoNotOptimize(estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, start));

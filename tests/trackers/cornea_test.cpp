@@ -13,6 +13,7 @@
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/trackers/cornea.h"
+#include "purkinje/trackers/scoring.h"
 
 namespace purkinje::trackers {
 namespace {
@@ -22,18 +23,7 @@ Scene bundled(const std::string& name) {
 }
 
 // The scene's exact glints, each told its light.
-std::vector<Glint> exact_glints(const Scene& scene) {
-  std::vector<Glint> glints;
-  const SceneTruth truth = compute_truth(scene);
-  for (const GlintTruth& g : truth.views.at(0).glints) {
-    if (g.status != PathStatus::ok) continue;
-    Glint found;
-    found.centre = g.pixel;
-    found.illuminator = g.illuminator;
-    glints.push_back(found);
-  }
-  return glints;
-}
+std::vector<Glint> exact_glints(const Scene& scene) { return exact_detections(compute_truth(scene).views).glints; }
 
 // The remote rig with a spherical cornea (the estimator's model) where the
 // scene's eye has its cornea.

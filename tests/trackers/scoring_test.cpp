@@ -160,6 +160,29 @@ TEST(Scorer, WritesRowsAndSummariesWithoutNaN) {
   EXPECT_EQ(score_table(empty).find("nan"), std::string::npos);
 }
 
+// A perfect tracker's detections score perfectly.
+TEST(Scorer, ExactDetectionsAreTheSeenLabels) {
+  EyeInCameraTruth a;
+  a.glints = {glint(0, PathStatus::ok, {100, 100}), glint(1, PathStatus::off_cornea, {140, 100}),
+              glint(2, PathStatus::ok, {120, 100})};
+  a.pupil = pupil({110, 110}, 4);
+  EyeInCameraTruth hidden;
+  hidden.pupil = pupil({60, 60}, 0);
+  const Detections d = exact_detections({a, hidden});
+  ASSERT_EQ(d.glints.size(), 2u);
+  EXPECT_EQ(d.glints[1].illuminator, 2);
+  EXPECT_EQ(d.glints[1].centre.u, 120);
+  ASSERT_EQ(d.pupils.size(), 1u);  // the hidden pupil is not seen
+  EXPECT_EQ(d.pupils[0].centre.v, 110);
+  Scorer scorer;
+  scorer.add("a", {a, hidden}, d);
+  const Score s = scorer.score();
+  EXPECT_EQ(s.glints.found, 2);
+  EXPECT_EQ(s.glints.identity_correct, 2);
+  EXPECT_EQ(s.pupils.found, 1);
+  EXPECT_EQ(s.glints.error_px.max + s.pupils.error_px.max, 0);
+}
+
 TEST(Scorer, RejectsABadRadius) {
   EXPECT_THROW(Scorer({0}), std::invalid_argument);
   EXPECT_THROW(Scorer({std::nan("")}), std::invalid_argument);

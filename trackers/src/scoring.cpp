@@ -29,6 +29,12 @@ namespace {
 
 double distance(const Pixel& a, const Pixel& b) { return std::hypot(a.u - b.u, a.v - b.v); }
 
+// A pupil the camera sees some of: a border point not hidden.
+bool seen(const PupilTruth& pupil) {
+  return std::any_of(pupil.border.begin(), pupil.border.end(),
+                     [](const PupilBorderPointTruth& b) { return b.status == PathStatus::ok; });
+}
+
 struct Label {
   Pixel pixel;
   int eye = -1, illuminator = -1;
@@ -161,6 +167,23 @@ double FeatureSummary::rate_within(int px) const {
 double FeatureSummary::false_positive_rate() const { return fraction(false_positives, detected - not_counted); }
 double FeatureSummary::identity_rate() const { return fraction(identity_correct, found); }
 
+Detections exact_detections(const std::vector<EyeInCameraTruth>& views) {
+  Detections d;
+  for (const EyeInCameraTruth& view : views) {
+    for (const GlintTruth& g : view.glints) {
+      if (g.status != PathStatus::ok) continue;
+      Glint found;
+      found.centre = g.pixel;
+      found.illuminator = g.illuminator;
+      d.glints.push_back(found);
+    }
+    if (view.pupil.ellipse_valid && seen(view.pupil)) {
+      d.pupils.push_back({view.pupil.ellipse.center, view.pupil.ellipse, 1.0});
+    }
+  }
+  return d;
+}
+
 Scorer::Scorer(const ScoringSettings& settings) {
   if (!(settings.match_radius_px > 0 && settings.match_radius_px <= 1000)) {
     throw std::invalid_argument("ScoringSettings: match_radius_px = " + std::to_string(settings.match_radius_px) +
@@ -182,9 +205,7 @@ void Scorer::add(const std::string& image, const std::vector<EyeInCameraTruth>& 
       }
     }
     if (view.pupil.ellipse_valid) {
-      const bool seen = std::any_of(view.pupil.border.begin(), view.pupil.border.end(),
-                                    [](const PupilBorderPointTruth& b) { return b.status == PathStatus::ok; });
-      pupils.push_back({view.pupil.ellipse.center, view.eye, -1, seen});
+      pupils.push_back({view.pupil.ellipse.center, view.eye, -1, seen(view.pupil)});
     }
   }
   std::vector<Pixel> glint_centres, pupil_centres;

@@ -35,6 +35,12 @@ struct Detections {
   std::vector<PupilFound> pupils;
 };
 
+// What a perfect tracker would find: the labels' glints the camera sees on
+// the cornea, each told its light, and the ellipse of each pupil the
+// camera sees some of, with confidence 1. Calibration from exact features
+// starts here.
+Detections exact_detections(const std::vector<EyeInCameraTruth>& views);
+
 struct ScoringSettings {
   double match_radius_px = 5;  // the field's usual figure; in (0, 1000]
 };

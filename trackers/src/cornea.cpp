@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -19,14 +20,18 @@ struct Observed {
   Pixel pixel;
 };
 
-// Where a spherical cornea centred at `c` puts a light's glint in the
-// camera; false when there is no glint there. The eye faces the camera: a
-// sphere's glints do not depend on its axis, only the corneal cap's border
-// does, and the glints a camera sees lie on the side facing it.
-bool glint_pixel(const Camera& camera, const EyeModel& model, const Point3& c, const Point3& light, Pixel& pixel) {
+// A spherical cornea centred at `c`, facing the camera: a sphere's glints
+// do not depend on its axis, only the corneal cap's border does, and the
+// glints a camera sees lie on the side facing it.
+std::optional<Eye> eye_at(const Camera& camera, const EyeModel& model, const Point3& c) {
   const Vector3 toward = camera.center() - c;
-  if (!(toward.norm() > 0)) return false;
-  const Eye eye = Eye::with_cornea_center(model, c, UnitVector3::normalize(toward));
+  if (!(toward.norm() > 0)) return std::nullopt;
+  return Eye::with_cornea_center(model, c, UnitVector3::normalize(toward));
+}
+
+// Where the eye puts a light's glint in the camera; false when there is
+// no glint there.
+bool glint_pixel(const Camera& camera, const Eye& eye, const Point3& light, Pixel& pixel) {
   const Reflection r = solve_reflection(eye, light, camera.center());
   if (r.status != PathStatus::ok) return false;
   const Projection p = camera.project(r.point);
@@ -76,10 +81,11 @@ CorneaCenterEstimate estimate_cornea_center(const Camera& camera, const std::vec
   // Residuals: predicted less observed pixels; the Jacobian by central
   // differences (the solver's glint is smooth in the centre).
   const auto predict = [&](const double* x, double* r) {
-    const Point3 c{x[0], x[1], x[2]};
+    const std::optional<Eye> eye = eye_at(camera, model, {x[0], x[1], x[2]});
+    if (!eye) return false;
     for (std::size_t i = 0; i < observed.size(); ++i) {
       Pixel p;
-      if (!glint_pixel(camera, model, c, observed[i].light, p)) return false;
+      if (!glint_pixel(camera, *eye, observed[i].light, p)) return false;
       r[2 * i] = p.u - observed[i].pixel.u;
       r[2 * i + 1] = p.v - observed[i].pixel.v;
     }

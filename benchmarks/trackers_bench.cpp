@@ -34,38 +34,42 @@ const renderer::SensorImage& frame(const std::string& name) {
   return it->second;
 }
 
-void glints(benchmark::State& state, const std::string& name) {
-  cv::setNumThreads(1);  // per core: frames, not their rows, go in parallel
+// The scene's frame as the detectors read it, with OpenCV on one thread:
+// per core, frames, not their rows, go in parallel.
+GreyView one_core_view(const std::string& name) {
+  cv::setNumThreads(1);
   const renderer::SensorImage& s = frame(name);
-  const GreyView image = grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
-  const BlobGlintDetector detector;
-  for (auto _ : state) benchmark::DoNotOptimize(detector.detect(image));
+  return grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
+}
+
+void count_frames(benchmark::State& state) {
   state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
                                                       benchmark::Counter::kIsRate);
+}
+
+void glints(benchmark::State& state, const std::string& name) {
+  const GreyView image = one_core_view(name);
+  const BlobGlintDetector detector;
+  for (auto _ : state) benchmark::DoNotOptimize(detector.detect(image));
+  count_frames(state);
 }
 
 // The pupil alone, told the frame's glints.
 void pupil(benchmark::State& state, const std::string& name) {
-  cv::setNumThreads(1);
-  const renderer::SensorImage& s = frame(name);
-  const GreyView image = grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
+  const GreyView image = one_core_view(name);
   const std::vector<Glint> found = BlobGlintDetector().detect(image);
   const StarburstPupilDetector detector;
   for (auto _ : state) benchmark::DoNotOptimize(detector.detect(image, found));
-  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                      benchmark::Counter::kIsRate);
+  count_frames(state);
 }
 
 // A whole frame: glints, then the pupil with the glints masked (the bar).
 void frame_tracked(benchmark::State& state, const std::string& name) {
-  cv::setNumThreads(1);
-  const renderer::SensorImage& s = frame(name);
-  const GreyView image = grey_view(std::span<const std::uint16_t>(s.values), s.width, s.height, s.bits);
+  const GreyView image = one_core_view(name);
   const BlobGlintDetector glint_detector;
   const StarburstPupilDetector pupil_detector;
   for (auto _ : state) benchmark::DoNotOptimize(pupil_detector.detect(image, glint_detector.detect(image)));
-  state.counters["frames_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                      benchmark::Counter::kIsRate);
+  count_frames(state);
 }
 
 void BM_GlintDetectorRemote(benchmark::State& s) { glints(s, "remote"); }

@@ -105,11 +105,12 @@ int write_outputs(const char* command, const ScoreOutput& request, const tracker
     return kBadInput;
   }
   const fs::path dir(request.output_dir);
+  const std::string table = trackers::score_table(score);
   try {
     std::error_code ec;
     fs::create_directories(dir / "overlays", ec);
     if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
-    write_file_atomically(dir / "score.txt", trackers::score_table(score));
+    write_file_atomically(dir / "score.txt", table);
     write_file_atomically(dir / "score.csv", trackers::score_csv(score));
     write_file_atomically(dir / "score.json", trackers::score_json(score));
     if (with_detections) write_file_atomically(dir / "detections.csv", trackers::detections_csv(detections));
@@ -123,7 +124,7 @@ int write_outputs(const char* command, const ScoreOutput& request, const tracker
     std::cerr << "purkinje " << command << ": error: " << error.what() << "\n";
     return kOutputError;
   }
-  std::cout << trackers::score_table(score) << "\nwrote " << (dir / "score.txt").string() << ", score.csv, score.json"
+  std::cout << table << "\nwrote " << (dir / "score.txt").string() << ", score.csv, score.json"
             << (with_detections ? ", detections.csv" : "") << " and " << overlays.size() << " overlays (the worst images)\n";
   return kOk;
 }

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include <map>
+#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -85,18 +86,37 @@ void BM_TrackersHeadset(benchmark::State& s) { frame_tracked(s, "headset"); }
 BENCHMARK(BM_TrackersRemote)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TrackersHeadset)->Unit(benchmark::kMillisecond);
 
-// The cornea's centre from one frame's exact glints (the calibration
-// issue's bar: at most 20 us), from a start 3.9 mm off.
-void cornea_center(benchmark::State& state, const std::string& name) {
+// The cornea's centre from one frame's glints (the calibration issue's
+// bar: at most 20 us), exact or with 0.1 px of Gaussian noise (64 draws,
+// taken in turn), from a start 3.9 mm off.
+void cornea_center(benchmark::State& state, const std::string& name, double noise_px) {
   const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
-  const std::vector<Glint> glints = exact_detections(compute_truth(scene).views).glints;
+  const Scene spherical = name == "remote" ? [&] {
+    Scene s = scene;
+    Eye eye = Eye::with_cornea_center(keratometric_eye(), scene.eyes[0].cornea_center(), scene.eyes[0].optical_axis());
+    s.eyes = {eye};
+    return s;
+  }() : scene;
+  const std::vector<Glint> exact = exact_detections(compute_truth(spherical).views).glints;
+  std::mt19937 random(7);
+  std::normal_distribution<double> noise(0, noise_px);
+  std::vector<std::vector<Glint>> draws(noise_px > 0 ? 64 : 1, exact);
+  for (std::vector<Glint>& glints : draws) {
+    for (Glint& g : glints) g.centre = {g.centre.u + noise(random), g.centre.v + noise(random)};
+  }
   const Point3 start = scene.eyes[0].cornea_center() + Vector3{2, -1.5, 3};
+  std::size_t i = 0;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, start));
+    benchmark::DoNotOptimize(
+        estimate_cornea_center(scene.cameras[0], scene.illuminators, draws[i++ % draws.size()], start));
   }
 }
-void BM_CorneaCenterHeadset(benchmark::State& s) { cornea_center(s, "headset"); }
+void BM_CorneaCenterHeadset(benchmark::State& s) { cornea_center(s, "headset", 0); }
+void BM_CorneaCenterHeadsetNoisy(benchmark::State& s) { cornea_center(s, "headset", 0.1); }
+void BM_CorneaCenterRemoteNoisy(benchmark::State& s) { cornea_center(s, "remote", 0.1); }
 BENCHMARK(BM_CorneaCenterHeadset)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CorneaCenterHeadsetNoisy)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CorneaCenterRemoteNoisy)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace purkinje::trackers

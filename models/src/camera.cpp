@@ -109,6 +109,29 @@ Projection Camera::project(const Point3& world_point) const {
   return out;
 }
 
+Projection Camera::project(const Point3& world_point, std::array<double, 6>& d_pixel_d_point) const {
+  d_pixel_d_point.fill(0);
+  const Projection out = project(world_point);
+  if (out.status == ProjectionStatus::behind_camera) return out;
+  const Point3 p = camera_from_world_ * world_point;
+  const double x = p.x / p.z, y = p.y / p.z;
+  const DistortedPoint d = distort_with_jacobian(distortion_, x, y);
+  // d(x, y)/d(camera point), then through the rotation to world.
+  const double dx[3] = {1 / p.z, 0, -x / p.z};
+  const double dy[3] = {0, 1 / p.z, -y / p.z};
+  const Rotation& r = camera_from_world_.rotation();
+  for (int k = 0; k < 3; ++k) {
+    double dx_dk = 0, dy_dk = 0;
+    for (int i = 0; i < 3; ++i) {
+      dx_dk += dx[i] * r(i, k);
+      dy_dk += dy[i] * r(i, k);
+    }
+    d_pixel_d_point[k] = intrinsics_.fx * (d.dxd_dx * dx_dk + d.dxd_dy * dy_dk);
+    d_pixel_d_point[3 + k] = intrinsics_.fy * (d.dyd_dx * dx_dk + d.dyd_dy * dy_dk);
+  }
+  return out;
+}
+
 UnitVector3 Camera::back_project(const Pixel& pixel) const {
   const double xd = (pixel.u - intrinsics_.cx) / intrinsics_.fx;
   const double yd = (pixel.v - intrinsics_.cy) / intrinsics_.fy;

@@ -17,9 +17,11 @@ namespace purkinje::optimizer {
 
 namespace {
 
-// Problems up to this size go to ceres::TinySolver (no heap allocation for
-// the common fixed sizes); larger ones to ceres::Problem.
-constexpr int max_tiny_size = 8;
+// Problems with up to this many parameters go to ceres::TinySolver
+// (dense normal equations; no heap allocation for the common fixed sizes),
+// whatever their number of residuals; larger ones to ceres::Problem, whose
+// set-up alone costs tens of microseconds.
+constexpr int max_tiny_parameters = 32;
 
 // Adapts a ResidualFunction to TinySolver's functor interface. TinySolver
 // wants a column-major Jacobian; ours is row-major. It also ignores the
@@ -43,6 +45,11 @@ struct TinyFunction {
   double relative_function_tolerance;
   double* absolute_function_tolerance;  // the solver's option
   mutable bool jacobian_evaluation_failed = false;
+  // Ours, row-major: members, so that a residual function that itself
+  // solves (nested) cannot overwrite them; small ones without allocating,
+  // for the specular solver's hot path.
+  mutable std::array<double, 64> small_row_major{};
+  mutable std::vector<double> large_row_major{};
 
   int NumResiduals() const { return num_residuals; }
   int NumParameters() const { return num_parameters; }
@@ -53,8 +60,10 @@ struct TinyFunction {
       std::fill_n(residuals, num_residuals, std::numeric_limits<double>::infinity());
       return false;
     }
-    std::array<double, max_tiny_size * max_tiny_size> row_major;
-    if (!(*function)(x, residuals, row_major.data())) {
+    const size_t size = static_cast<size_t>(num_residuals) * num_parameters;
+    if (size > small_row_major.size()) large_row_major.resize(size);
+    double* row_major = size > small_row_major.size() ? large_row_major.data() : small_row_major.data();
+    if (!(*function)(x, residuals, row_major)) {
       jacobian_evaluation_failed = true;
       std::fill_n(residuals, num_residuals, 0.0);
       std::fill_n(jacobian, num_residuals * num_parameters, 0.0);
@@ -141,7 +150,7 @@ Summary solve_tiny(int num_residuals, std::span<double> x, const ResidualFunctio
   summary.message = describe<Solver>(tiny.status);
   if (function.jacobian_evaluation_failed) {
     summary.converged = false;
-    std::array<double, max_tiny_size> r;
+    std::vector<double> r(static_cast<size_t>(num_residuals));
     double cost = std::numeric_limits<double>::infinity();
     if (residuals(x.data(), r.data(), nullptr)) {
       cost = 0;
@@ -257,7 +266,7 @@ Summary solve(int num_residuals, std::span<double> x, const ResidualFunction& re
               const Options& options) {
   check_arguments(num_residuals, x, options);
   const int num_parameters = static_cast<int>(x.size());
-  if (num_residuals > max_tiny_size || num_parameters > max_tiny_size) {
+  if (num_parameters > max_tiny_parameters) {
     return solve_large(num_residuals, x, residuals, options);
   }
   if (num_residuals == num_parameters) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <stdexcept>
@@ -94,6 +95,37 @@ TEST(Camera, DistortsWithTheBrownConradyPolynomial) {
   const Projection p = camera.project({0.1 * 300, 0.2 * 300, 300});
   EXPECT_NEAR(p.pixel.u, 5000 * 0.1006825125 + 1279.5, 1e-9);
   EXPECT_NEAR(p.pixel.v, 5000 * 0.201215025 + 1023.5, 1e-9);
+}
+
+TEST(Camera, ProjectionDerivativesOfAPinholeAreFOverZ) {
+  // u = fx x / z + cx: du/dx = 5000 / 500 = 10, du/dz = -5000 * 10 / 500^2
+  // = -0.2; v likewise with y = -5: dv/dy = 10, dv/dz = 0.1.
+  std::array<double, 6> d{};
+  const Projection p = camera_at_origin().project({10, -5, 500}, d);
+  EXPECT_NEAR(p.pixel.u, 1379.5, 1e-9);
+  const double expected[6] = {10, 0, -0.2, 0, 10, 0.1};
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(d[i], expected[i], 1e-12) << i;
+}
+
+TEST(Camera, ProjectionDerivativesMatchDifferencesThroughATurnedDistortingLens) {
+  const Distortion distortion{.k1 = -0.2, .k2 = 0.05, .p1 = 0.002, .p2 = -0.001, .k3 = 0.01};
+  const Camera camera("cam", reference_intrinsics(), distortion,
+                      camera_looking_at({40, -30, -20}, {5, 8, 560}, {0.2, -1, 0.1}));
+  const Point3 point{30, 45, 540};
+  std::array<double, 6> d{};
+  ASSERT_EQ(camera.project(point, d).status, ProjectionStatus::ok);
+  constexpr double h = 1e-4;
+  for (int k = 0; k < 3; ++k) {
+    Point3 plus = point, minus = point;
+    (k == 0 ? plus.x : k == 1 ? plus.y : plus.z) += h;
+    (k == 0 ? minus.x : k == 1 ? minus.y : minus.z) -= h;
+    const Pixel a = camera.project(plus).pixel, b = camera.project(minus).pixel;
+    EXPECT_NEAR(d[k], (a.u - b.u) / (2 * h), 1e-6) << k;
+    EXPECT_NEAR(d[3 + k], (a.v - b.v) / (2 * h), 1e-6) << k;
+  }
+  std::array<double, 6> behind{1, 1, 1, 1, 1, 1};
+  EXPECT_EQ(camera_at_origin().project({0, 0, -5}, behind).status, ProjectionStatus::behind_camera);
+  for (const double e : behind) EXPECT_EQ(e, 0);
 }
 
 TEST(Camera, ZeroDistortionLeavesCoordinatesUnchanged) {

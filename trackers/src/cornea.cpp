@@ -2,141 +2,322 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
-#include "purkinje/models/eye.h"
 #include "purkinje/models/optimizer.h"
-#include "purkinje/models/specular.h"
+#include "purkinje/trackers/sphere_glint.h"
 
 namespace purkinje::trackers {
 
 namespace {
 
-struct Observed {
-  Point3 light;
-  Pixel pixel;
-};
+// Beyond this, J^T J's inverse is rounding noise in double precision: the
+// glints do not determine the unknowns at all.
+constexpr double kSingularCondition = 1e12;
 
-// A spherical cornea centred at `c`, facing the camera: a sphere's glints
-// do not depend on its axis, only the corneal cap's border does, and the
-// glints a camera sees lie on the side facing it.
-std::optional<Eye> eye_at(const Camera& camera, const EyeModel& model, const Point3& c) {
-  const Vector3 toward = camera.center() - c;
-  if (!(toward.norm() > 0)) return std::nullopt;
-  return Eye::with_cornea_center(model, c, UnitVector3::normalize(toward));
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
 }
 
-// Where the eye puts a light's glint in the camera; false when there is
-// no glint there.
-bool glint_pixel(const Camera& camera, const Eye& eye, const Point3& light, Pixel& pixel) {
-  const Reflection r = solve_reflection(eye, light, camera.center());
-  if (r.status != PathStatus::ok) return false;
-  const Projection p = camera.project(r.point);
-  if (p.status == ProjectionStatus::behind_camera) return false;
-  pixel = p.pixel;
-  return true;
+void check(const CorneaFitSettings& s) {
+  const auto fail = [](const std::string& key, double value, const std::string& rule) {
+    throw std::invalid_argument("CorneaFitSettings: " + key + " = " + number(value) + ": " + rule);
+  };
+  if (!(s.cornea_radius_mm > 0 && s.cornea_radius_mm < 100)) {
+    fail("cornea_radius_mm", s.cornea_radius_mm, "must be in (0, 100)");
+  }
+  if (!(s.radius_prior_sd_mm >= 0 && std::isfinite(s.radius_prior_sd_mm))) {
+    fail("radius_prior_sd_mm", s.radius_prior_sd_mm, "must be >= 0 (0: no prior)");
+  }
+  if (!(s.pixel_noise_px > 0 && std::isfinite(s.pixel_noise_px))) {
+    fail("pixel_noise_px", s.pixel_noise_px, "must be > 0");
+  }
+  if (!(s.max_sd_mm > 0)) fail("max_sd_mm", s.max_sd_mm, "must be > 0");
+}
+
+// The direction an uncertainty runs along, for a warning.
+std::string direction(const Eigen::Vector3d& v) {
+  char text[96];
+  std::snprintf(text, sizeof text, "(%.3g, %.3g, %.3g)", v.x(), v.y(), v.z());
+  return text;
+}
+
+// A start for one frame's centre from one camera's glints, exact for
+// exact glints of a sphere (the construction of Guestrin and Eizenman
+// 2006): each glint's ray and its light span a plane through the camera
+// and the centre, so the centre lies on the planes' common line; along
+// it, the depth is where the rays meet the sphere at points whose normals
+// obey the law of reflection. nullopt when the planes do not meet in a
+// line (lights in line with the camera and the eye) or no depth fits.
+std::optional<Point3> closed_form_center(const Camera& camera, const std::vector<Illuminator>& lights,
+                                         const std::vector<GlintObservation>& glints, int frame,
+                                         int camera_index, double radius) {
+  struct Ray {
+    Eigen::Vector3d light, direction, plane_normal;
+  };
+  const Point3 o = camera.center();
+  const Eigen::Vector3d origin(o.x, o.y, o.z);
+  std::vector<Ray> rays;
+  Eigen::Matrix3d planes = Eigen::Matrix3d::Zero();
+  for (const GlintObservation& g : glints) {
+    if (g.frame != frame || g.camera != camera_index) continue;
+    const UnitVector3 ray = camera.back_project(g.pixel);
+    const Point3& l = lights[g.light].position;
+    const Eigen::Vector3d light(l.x, l.y, l.z), direction(ray.x(), ray.y(), ray.z());
+    const Eigen::Vector3d normal = (light - origin).cross(direction);
+    if (!(normal.norm() > 1e-12 * (light - origin).norm())) continue;  // a light on its own glint's ray
+    rays.push_back({light, direction, normal.normalized()});
+    planes += rays.back().plane_normal * rays.back().plane_normal.transpose();
+  }
+  if (rays.size() < 2) return std::nullopt;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(planes);
+  // Planes that (nearly) coincide leave the line undetermined.
+  if (!(eigen.eigenvalues()(1) > 1e-8 * eigen.eigenvalues()(2))) return std::nullopt;
+  Eigen::Vector3d d = eigen.eigenvectors().col(0);
+  if (d.dot(rays[0].direction) < 0) d = -d;
+
+  // Mean over the glints of the signed angle (its sine) from the normal
+  // where the ray meets a sphere centred at depth `depth` to the law of
+  // reflection's normal there; `missed` when some ray passes the sphere by.
+  const auto mismatch = [&](double depth, bool& missed) {
+    double sum = 0;
+    missed = false;
+    for (const Ray& r : rays) {
+      const double along = r.direction.dot(d);
+      const double discriminant = radius * radius - depth * depth * (1 - along * along);
+      if (discriminant < 0) {
+        missed = true;
+        return 0.0;
+      }
+      const Eigen::Vector3d p = origin + (depth * along - std::sqrt(discriminant)) * r.direction;
+      const Eigen::Vector3d n = (p - (origin + depth * d)) / radius;
+      const Eigen::Vector3d bisector = (r.light - p).normalized() - r.direction;
+      sum += n.cross(bisector).dot(r.plane_normal) / bisector.norm();
+    }
+    return sum / static_cast<double>(rays.size());
+  };
+  // Depths from just outside the camera to where the first ray grazes.
+  double far = INFINITY;
+  for (const Ray& r : rays) {
+    const double along = r.direction.dot(d);
+    const double off = std::sqrt(std::max(0.0, 1 - along * along));
+    if (off > 0) far = std::min(far, radius / off);
+  }
+  if (!std::isfinite(far)) return std::nullopt;
+  double lo = radius * (1 + 1e-9), hi = far * (1 - 1e-12);
+  bool missed = false;
+  double f_lo = mismatch(lo, missed);
+  if (missed) return std::nullopt;
+  double f_hi = mismatch(hi, missed);
+  if (missed || !(f_lo * f_hi < 0)) return std::nullopt;
+  // Regula falsi, Illinois variant: superlinear, and never leaves the bracket.
+  int side = 0;
+  double depth = lo;
+  for (int i = 0; i < 100 && hi - lo > 1e-10 * hi; ++i) {
+    depth = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+    const double f = mismatch(depth, missed);
+    if (missed) return std::nullopt;
+    if (f * f_hi > 0) {
+      hi = depth, f_hi = f;
+      if (side == 1) f_lo /= 2;
+      side = 1;
+    } else if (f * f_lo > 0) {
+      lo = depth, f_lo = f;
+      if (side == -1) f_hi /= 2;
+      side = -1;
+    } else {
+      break;  // exactly zero
+    }
+  }
+  const Eigen::Vector3d c = origin + depth * d;
+  return Point3{c.x(), c.y(), c.z()};
 }
 
 }  // namespace
 
-CorneaCenterEstimate estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
-                                            const std::vector<Glint>& glints, const Point3& start,
-                                            const CorneaCenterSettings& s) {
-  const auto fail = [](const std::string& what) { throw std::invalid_argument("CorneaCenterSettings: " + what); };
-  if (!(s.cornea_radius_mm > 0 && s.cornea_radius_mm < 100)) {
-    fail("cornea_radius_mm = " + std::to_string(s.cornea_radius_mm) + ": must be in (0, 100)");
+std::array<double, 9> CorneaFit::center_covariance(int frame) const {
+  const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(covariance_mm2.size()))));
+  if (!has_covariance() || frame < 0 || 3 * frame + 3 > n) {
+    throw std::out_of_range("CorneaFit::center_covariance: no covariance for frame " + std::to_string(frame));
   }
-  if (!(s.pixel_noise_px > 0 && std::isfinite(s.pixel_noise_px))) {
-    fail("pixel_noise_px = " + std::to_string(s.pixel_noise_px) + ": must be > 0");
+  std::array<double, 9> block{};
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) block[3 * a + b] = covariance_mm2[(3 * frame + a) * n + 3 * frame + b];
   }
-  if (!(s.max_condition > 1)) fail("max_condition = " + std::to_string(s.max_condition) + ": must be > 1");
+  return block;
+}
 
-  std::vector<Observed> observed;
-  for (const Glint& g : glints) {
-    if (g.illuminator < 0) continue;
-    if (g.illuminator >= static_cast<int>(lights.size())) {
-      throw std::invalid_argument("estimate_cornea_center: a glint of light " + std::to_string(g.illuminator) +
-                                  " of " + std::to_string(lights.size()));
+double CorneaFit::radius_sd_mm() const {
+  if (!radius_fitted) return 0;
+  if (!has_covariance()) throw std::out_of_range("CorneaFit::radius_sd_mm: no covariance");
+  return std::sqrt(covariance_mm2.back());
+}
+
+CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                     const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
+                     const CorneaFitSettings& s) {
+  check(s);
+  const int frames = static_cast<int>(starts.size());
+  if (frames == 0) throw std::invalid_argument("fit_cornea: no frames (starts is empty)");
+  std::vector<int> per_frame(frames, 0);
+  std::vector<int> cameras_used;
+  for (const GlintObservation& g : glints) {
+    const auto bad = [&](const std::string& what, int value, std::size_t size) {
+      throw std::invalid_argument("fit_cornea: a glint's " + what + " = " + std::to_string(value) +
+                                  ": must be in [0, " + std::to_string(size) + ")");
+    };
+    if (g.frame < 0 || g.frame >= frames) bad("frame", g.frame, starts.size());
+    if (g.camera < 0 || g.camera >= static_cast<int>(cameras.size())) bad("camera", g.camera, cameras.size());
+    if (g.light < 0 || g.light >= static_cast<int>(lights.size())) bad("light", g.light, lights.size());
+    ++per_frame[g.frame];
+    if (std::find(cameras_used.begin(), cameras_used.end(), g.camera) == cameras_used.end()) {
+      cameras_used.push_back(g.camera);
     }
-    observed.push_back({lights[g.illuminator].position, g.centre});
-  }
-  EyeModel model = keratometric_eye();
-  model.anterior_cornea = {s.cornea_radius_mm, 0.0};
-  model.limbus_radius_mm = std::min(model.limbus_radius_mm, 0.95 * s.cornea_radius_mm);
-  model.iris_radius_mm = std::min(model.iris_radius_mm, model.limbus_radius_mm);
-  model.pupil_radius_mm = std::min(model.pupil_radius_mm, 0.5 * model.iris_radius_mm);
-
-  CorneaCenterEstimate out;
-  out.center = start;
-  out.glints_used = static_cast<int>(observed.size());
-  if (observed.size() < 2) {
-    out.warnings.push_back("fewer than two glints with their light told: the cornea's centre is not determined");
-    return out;
   }
 
-  const int m = 2 * static_cast<int>(observed.size());
-  // Residuals: predicted less observed pixels; the Jacobian by central
-  // differences (the solver's glint is smooth in the centre).
-  const auto predict = [&](const double* x, double* r) {
-    const std::optional<Eye> eye = eye_at(camera, model, {x[0], x[1], x[2]});
-    if (!eye) return false;
-    for (std::size_t i = 0; i < observed.size(); ++i) {
-      Pixel p;
-      if (!glint_pixel(camera, *eye, observed[i].light, p)) return false;
-      r[2 * i] = p.u - observed[i].pixel.u;
-      r[2 * i + 1] = p.v - observed[i].pixel.v;
+  CorneaFit out;
+  out.centers = starts;
+  out.cornea_radius_mm = s.cornea_radius_mm;
+  out.radius_fitted = s.fit_radius;
+  out.glints_used = static_cast<int>(glints.size());
+  for (int f = 0; f < frames; ++f) {
+    if (per_frame[f] < 2) {
+      out.warnings.push_back("frame " + std::to_string(f) + " has " + std::to_string(per_frame[f]) +
+                             " glint(s) with their light told; two or more are needed: the cornea's centre "
+                             "is not determined");
     }
-    return true;
-  };
-  constexpr double kStep = 1e-5;  // mm: the solver's glints are good to about 1e-10 mm
-  std::vector<double> plus(m), minus(m);
+  }
+  if (!out.warnings.empty()) return out;
+  const bool prior = s.fit_radius && s.radius_prior_sd_mm > 0;
+  if (s.fit_radius && !prior && frames == 1 && cameras_used.size() == 1) {
+    out.warnings.push_back(
+        "the radius is fitted from one frame of one camera: radius and depth trade against each other "
+        "there, so the radius is hardly determined; use several frames with the eye in different places, "
+        "a second camera, or a prior (radius_prior_sd_mm)");
+  }
+
+  const int n = 3 * frames + (s.fit_radius ? 1 : 0);
+  const int m = 2 * static_cast<int>(glints.size()) + (prior ? 1 : 0);
+  std::vector<std::optional<UnitVector3>> warm(glints.size());
   const optimizer::ResidualFunction residuals = [&](const double* x, double* r, double* jacobian) {
-    if (!predict(x, r)) return false;
-    if (!jacobian) return true;
-    for (int k = 0; k < 3; ++k) {
-      double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
-      xp[k] += kStep, xm[k] -= kStep;
-      if (!predict(xp, plus.data()) || !predict(xm, minus.data())) return false;
-      for (int i = 0; i < m; ++i) jacobian[3 * i + k] = (plus[i] - minus[i]) / (2 * kStep);
+    const double radius = s.fit_radius ? x[n - 1] : s.cornea_radius_mm;
+    if (jacobian != nullptr) std::fill_n(jacobian, static_cast<std::size_t>(m) * n, 0.0);
+    for (std::size_t i = 0; i < glints.size(); ++i) {
+      const GlintObservation& o = glints[i];
+      const double* c = x + 3 * o.frame;
+      const std::optional<SphereGlint> g =
+          sphere_glint(cameras[o.camera], {c[0], c[1], c[2]}, radius, lights[o.light].position, warm[i],
+                       jacobian != nullptr);
+      if (!g) return false;
+      warm[i] = g->normal;
+      r[2 * i] = g->pixel.u - o.pixel.u;
+      r[2 * i + 1] = g->pixel.v - o.pixel.v;
+      if (jacobian == nullptr) continue;
+      for (int row = 0; row < 2; ++row) {
+        double* j = jacobian + (2 * i + row) * n;
+        for (int k = 0; k < 3; ++k) j[3 * o.frame + k] = g->d_pixel[4 * row + k];
+        if (s.fit_radius) j[n - 1] = g->d_pixel[4 * row + 3];
+      }
+    }
+    if (prior) {
+      // In pixels, so that it weighs as (radius - r0) / prior sd once the
+      // residuals are divided by the pixel noise.
+      const double scale = s.pixel_noise_px / s.radius_prior_sd_mm;
+      r[m - 1] = (radius - s.cornea_radius_mm) * scale;
+      if (jacobian != nullptr) jacobian[static_cast<std::size_t>(m - 1) * n + n - 1] = scale;
     }
     return true;
   };
-  std::array<double, 3> x{start.x, start.y, start.z};
-  const optimizer::Summary summary = optimizer::solve(m, x, residuals);
-  out.center = {x[0], x[1], x[2]};
+
+  // Each frame starts where its first camera's glints put a sphere of the
+  // start's radius, or at the caller's start where they do not.
+  std::vector<double> x(n);
+  for (int f = 0; f < frames; ++f) {
+    Point3 start = starts[f];
+    const auto first = std::find_if(glints.begin(), glints.end(), [&](const GlintObservation& g) { return g.frame == f; });
+    const std::optional<Point3> closed =
+        closed_form_center(cameras[first->camera], lights, glints, f, first->camera, s.cornea_radius_mm);
+    if (closed && closed->is_finite()) start = *closed;
+    x[3 * f] = start.x, x[3 * f + 1] = start.y, x[3 * f + 2] = start.z;
+  }
+  if (s.fit_radius) x[n - 1] = s.cornea_radius_mm;
+  // Steps below 1e-10 of the centre's distance (4e-9 mm at 35 mm, 6e-8 mm
+  // at 600 mm) are far below any glint's noise and the 1e-6 mm the fit
+  // must reach from exact glints; with noisy glints Gauss-Newton
+  // converges only linearly, and chasing rounding would cost iterations
+  // that each change nothing.
+  optimizer::Options options;
+  options.parameter_tolerance = 1e-10;
+  options.function_tolerance = 1e-12;
+  const optimizer::Summary summary = optimizer::solve(m, x, residuals, options);
+  for (int f = 0; f < frames; ++f) out.centers[f] = {x[3 * f], x[3 * f + 1], x[3 * f + 2]};
+  if (s.fit_radius) out.cornea_radius_mm = x[n - 1];
   out.converged = summary.converged;
 
-  std::vector<double> r(m), jacobian(3 * m);
+  std::vector<double> r(m), jacobian(static_cast<std::size_t>(m) * n);
   if (!residuals(x.data(), r.data(), jacobian.data())) {
     out.converged = false;
-    out.warnings.push_back("no glint of some light on a cornea at the estimate: the fit failed");
+    out.warnings.push_back("some light has no glint on the cornea at the estimate: the fit failed (" +
+                           summary.message + ")");
     return out;
   }
   double sum = 0;
-  for (const double e : r) sum += e * e;
-  out.rms_residual_px = std::sqrt(sum / m);
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> j(jacobian.data(), m, 3);
-  const Eigen::Matrix3d normal = j.transpose() * j;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(normal);
-  const double lo = eigen.eigenvalues()(0), hi = eigen.eigenvalues()(2);
+  for (int i = 0; i < 2 * static_cast<int>(glints.size()); ++i) sum += r[i] * r[i];
+  out.rms_residual_px = std::sqrt(sum / (2.0 * glints.size()));
+
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jacobian.data(), m, n);
+  const Eigen::MatrixXd normal = j.transpose() * j;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  const double lo = eigen.eigenvalues()(0), hi = eigen.eigenvalues()(n - 1);
   out.condition = lo > 0 ? hi / lo : INFINITY;
-  if (!(out.condition <= s.max_condition)) {
-    out.warnings.push_back("the glints hardly constrain the centre along one direction (condition " +
-                           std::to_string(out.condition) + "): it is not identifiable from them");
+  if (!(out.condition <= kSingularCondition)) {
+    out.warnings.push_back("the glints do not determine the unknowns (condition of J^T J " +
+                           number(out.condition) + "), e.g. lights at one place or in line with the eye");
     if (!std::isfinite(out.condition)) out.condition = 0;
     return out;
   }
-  const Eigen::Matrix3d covariance = s.pixel_noise_px * s.pixel_noise_px * normal.inverse();
-  std::array<double, 9> c{};
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) c[3 * a + b] = covariance(a, b);
+  const Eigen::VectorXd inverse_values = eigen.eigenvalues().cwiseInverse();
+  const Eigen::MatrixXd covariance = s.pixel_noise_px * s.pixel_noise_px * eigen.eigenvectors() *
+                                     inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  out.covariance_mm2.assign(covariance.data(), covariance.data() + n * n);  // symmetric: either order
+
+  for (int f = 0; f < frames; ++f) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> block(covariance.block<3, 3>(3 * f, 3 * f));
+    const double sd = std::sqrt(std::max(0.0, block.eigenvalues()(2)));
+    if (sd > s.max_sd_mm) {
+      out.warnings.push_back("frame " + std::to_string(f) + "'s cornea centre is weakly determined: " +
+                             number(sd) + " mm standard deviation along " +
+                             direction(block.eigenvectors().col(2)) + " at " + number(s.pixel_noise_px) +
+                             " px of glint noise");
+    }
   }
-  out.covariance_mm2 = c;
+  if (s.fit_radius && std::sqrt(covariance(n - 1, n - 1)) > s.max_sd_mm) {
+    out.warnings.push_back("the cornea's radius is weakly determined: " +
+                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " +
+                           number(s.pixel_noise_px) + " px of glint noise");
+  }
   if (!out.converged) out.warnings.push_back("the fit stopped before converging: " + summary.message);
   return out;
+}
+
+CorneaFit estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
+                                 const std::vector<Glint>& glints, const Point3& start,
+                                 const CorneaFitSettings& settings) {
+  std::vector<GlintObservation> observed;
+  observed.reserve(glints.size());
+  for (const Glint& g : glints) {
+    if (g.illuminator >= 0) observed.push_back({0, 0, g.illuminator, g.centre});
+  }
+  return fit_cornea({camera}, lights, observed, {start}, settings);
 }
 
 }  // namespace purkinje::trackers

@@ -4,6 +4,7 @@
 // top-left pixel, so u = fx x/z + cx exactly as cv::projectPoints.
 // Optional Brown-Conrady distortion with OpenCV's coefficient order.
 
+#include <array>
 #include <string>
 
 #include "purkinje/models/geometry.h"
@@ -60,6 +61,9 @@ class Camera {
   // z = 0 or behind are behind_camera; pixels beyond [-0.5, size - 0.5]
   // are outside_image (the pixel is still filled in).
   Projection project(const Point3& world_point) const;
+  // The same, with d(u, v)/d(world point) at that point (row-major 2 x 3,
+  // px per mm) for fits; the derivatives are 0 when behind_camera.
+  Projection project(const Point3& world_point, std::array<double, 6>& d_pixel_d_point) const;
   // Pixel to the world direction of its viewing ray (distortion removed
   // iteratively to 1e-12 px).
   UnitVector3 back_project(const Pixel& pixel) const;

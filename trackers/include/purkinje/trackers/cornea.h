@@ -1,12 +1,12 @@
 #pragma once
-// The cornea's centre from glints (the calibration issue, first part): the
-// centre of a spherical cornea of known radius that puts each light's
-// glint where the camera saw it, by least squares on the glints' pixels
-// through the specular-path solver, with its covariance under pixel noise
-// and a warning where the glints do not pin it down.
+// The cornea from glints (the calibration issue): the centres of a
+// spherical cornea, one per frame, and optionally its radius, that put
+// each light's glint where the cameras saw it. Least squares on the
+// glints' pixels through the optimizer facade, with the covariance of
+// every estimate under pixel noise and warnings where the glints do not
+// pin the answer down.
 
 #include <array>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,34 +16,64 @@
 
 namespace purkinje::trackers {
 
-struct CorneaCenterSettings {
-  double cornea_radius_mm = 7.8;  // the tracker's eye model: a sphere, > 0
-  double pixel_noise_px = 0.1;    // standard deviation of a glint's u and v, > 0, for the covariance
-  // A problem whose normal matrix is worse conditioned than this is called
-  // degenerate: the centre moves far along some direction for a small
-  // change of the glints.
-  double max_condition = 1e8;
+// One glint seen: in which frame (the eye in one place), by which camera,
+// of which light, and where in that camera's image.
+struct GlintObservation {
+  int frame = 0;
+  int camera = 0;
+  int light = 0;
+  Pixel pixel;
 };
 
-struct CorneaCenterEstimate {
-  Point3 center;  // world, mm
-  // Row-major, mm^2: (J^T J)^-1 times the pixel noise's variance, J the
-  // glints' pixels by the centre at the estimate; absent when the glints
-  // do not determine the centre (fewer than two).
-  std::optional<std::array<double, 9>> covariance_mm2;
+struct CorneaFitSettings {
+  // The tracker's eye model, a sphere: the known radius, or the fit's
+  // start when fit_radius. In (0, 100).
+  double cornea_radius_mm = 7.8;
+  bool fit_radius = false;
+  // With fit_radius: > 0 adds a Gaussian prior on the radius at
+  // cornea_radius_mm with this standard deviation; 0, none.
+  double radius_prior_sd_mm = 0;
+  double pixel_noise_px = 0.1;  // standard deviation of a glint's u and v, > 0
+  // An estimate whose standard deviation exceeds this is reported as
+  // weakly determined (a warning); > 0.
+  double max_sd_mm = 10;
+};
+
+struct CorneaFit {
+  std::vector<Point3> centers;  // world mm, one per frame
+  double cornea_radius_mm = 0;  // fitted, or the settings' when not fitted
+  bool radius_fitted = false;
+  // Row-major covariance of the unknowns: the frames' centres in order,
+  // then the radius when fitted; mm^2. sigma^2 (J^T J)^-1 with J the
+  // glints' pixels by the unknowns at the estimate. Empty when the glints
+  // do not determine them.
+  std::vector<double> covariance_mm2;
   double rms_residual_px = 0;  // of the glints' pixels at the estimate
-  double condition = 0;        // of J^T J (0 when undetermined)
+  double condition = 0;        // of J^T J (0 when not computed)
   int glints_used = 0;
   bool converged = false;
   std::vector<std::string> warnings;  // why the estimate should not be trusted, if it should not
+
+  bool has_covariance() const { return !covariance_mm2.empty(); }
+  // The 3 x 3 block of a frame's centre (row-major); needs has_covariance().
+  std::array<double, 9> center_covariance(int frame) const;
+  // 0 when the radius is not fitted; needs has_covariance() otherwise.
+  double radius_sd_mm() const;
 };
 
-// `glints` with their light told (illuminator >= 0; others are left out),
-// `start` a guess of the centre (a tracker's nominal eye). Throws
-// std::invalid_argument for settings out of range or a light index the
-// list does not have.
-CorneaCenterEstimate estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
-                                            const std::vector<Glint>& glints, const Point3& start,
-                                            const CorneaCenterSettings& settings = {});
+// Fits the centres (starting at `starts`, one per frame) and, when asked,
+// the radius. Throws std::invalid_argument naming the value for settings
+// out of range or an observation whose frame, camera or light the lists
+// do not have.
+CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                     const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
+                     const CorneaFitSettings& settings = {});
+
+// One frame from one camera: a detector's glints with their light told
+// (illuminator >= 0; others are left out), `start` a guess of the centre
+// (a tracker's nominal eye).
+CorneaFit estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
+                                 const std::vector<Glint>& glints, const Point3& start,
+                                 const CorneaFitSettings& settings = {});
 
 }  // namespace purkinje::trackers

@@ -1,0 +1,262 @@
+// Gaze from exact features (the calibration issue's bars): the model-based
+// method, its eye model matching the scene's, calibrated on 9 targets,
+// within 0.01 deg over a 16 x 16 screen grid, also after the head moves
+// 100 mm sideways and 100 mm back; the polynomial mapping's errors for the
+// same moves, reported beside the classic MATLAB framework's.
+
+#include "purkinje/trackers/gaze.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "purkinje/models/scene_file.h"
+#include "purkinje/models/truth.h"
+
+namespace purkinje::trackers {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180;
+
+Scene bundled(const std::string& name) {
+  return load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
+}
+
+// The remote rig (camera at the origin, LEDs 100 mm either side) below a
+// 24-inch 16:10 screen, 518 x 324 mm, 20 mm above the camera, facing an
+// eye 600 mm away: a one-surface spherical cornea, kappa 5 deg toward the
+// nose side and 1.5 deg up, as model-based trackers assume. The camera
+// has the remote's lens and pixels on a 1280 x 1024 sensor, so that the
+// eye stays in view 100 mm to the side.
+struct GazeRig {
+  Scene rig = [] {
+    Scene s = bundled("remote");
+    const Camera& c = s.cameras[0];
+    s.cameras[0] = Camera(c.name(), Intrinsics::from_focal_length(c.focal_length_mm(), c.sensor().pixel_pitch_mm, 1280, 1024),
+                          c.distortion(), c.world_from_camera(), c.sensor());
+    return s;
+  }();
+  Screen screen{{-259, -344, 0}, UnitVector3::unit_x(), UnitVector3::unit_y(), 518, 324};
+  EyeModel eye = [] {
+    EyeModel m = keratometric_eye();
+    m.kappa_horizontal_rad = 5 * kDeg;
+    m.kappa_vertical_rad = 1.5 * kDeg;
+    return m;
+  }();
+  Point3 home{0, 0, 610};  // the centre of rotation at calibration
+
+  // The truth of the eye, rotating about `center`, fixating `target`.
+  EyeInCameraTruth view(const Point3& center, const ScreenPoint& target) const {
+    Scene s = rig;
+    s.eyes = {Eye::fixating(eye, center, screen.at(target))};
+    return compute_truth(s).views.front();
+  }
+  Point3 cornea_center(const Point3& center, const ScreenPoint& target) const {
+    return Eye::fixating(eye, center, screen.at(target)).cornea_center();
+  }
+  // The tracker's matching eye model, kappa not yet known.
+  GazeEyeModel tracker_eye() const {
+    GazeEyeModel m;
+    m.cornea_radius_mm = eye.anterior_cornea.radius_mm;
+    m.pupil_depth_mm = eye.anterior_cornea.radius_mm - eye.iris_depth_mm;
+    m.refractive_index = eye.aqueous_index;
+    return m;
+  }
+};
+
+// The angle at the eye between where it looks and where it is said to.
+double error_deg(const GazeRig& s, const Point3& center, const ScreenPoint& target, const ScreenPoint& estimate) {
+  const Point3 c = s.cornea_center(center, target);
+  return angle_between(s.screen.at(estimate) - c, s.screen.at(target) - c) / kDeg;
+}
+
+struct Errors {
+  double mean_deg = 0, max_deg = 0;
+  int missing = 0;
+};
+
+TEST(Screen, PlacesAndHitsPointsByHand) {
+  const Screen screen{{-100, -50, 0}, UnitVector3::unit_x(), UnitVector3::unit_y(), 200, 100};
+  const Point3 p = screen.at({30, 20});
+  EXPECT_EQ(p, (Point3{-70, -30, 0}));
+  // From (0, 0, 600) toward (-70, -30, 0).
+  const std::optional<ScreenPoint> hit = screen.hit({0, 0, 600}, Vector3{-70, -30, -600});
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->x_mm, 30, 1e-12);
+  EXPECT_NEAR(hit->y_mm, 20, 1e-12);
+  EXPECT_FALSE(screen.hit({0, 0, 600}, Vector3{0, 0, 1}));  // looking away
+  EXPECT_FALSE(screen.hit({0, 0, 600}, Vector3{1, 0, 0}));  // along the plane
+  const std::vector<ScreenPoint> grid = screen.grid(2, 2);
+  ASSERT_EQ(grid.size(), 4u);
+  EXPECT_DOUBLE_EQ(grid[1].x_mm, 150);
+  EXPECT_DOUBLE_EQ(grid[2].y_mm, 75);
+  EXPECT_THROW(screen.grid(0, 3), std::invalid_argument);
+}
+
+// The eye's own fixation solver puts its visual axis through the target:
+// the tracker's kappa convention must agree with it.
+TEST(ModelGaze, KappaTurnsTheOpticalAxisAsThePresetsDo) {
+  const GazeRig s;
+  const Point3 target = s.screen.at({50, 250});
+  const Eye eye = Eye::fixating(s.eye, s.home, target);
+  const UnitVector3 v = visual_axis_for(eye.optical_axis(), s.eye.kappa_horizontal_rad, s.eye.kappa_vertical_rad);
+  EXPECT_LT(angle_between(v, target - eye.cornea_center()), 1e-12);
+  EXPECT_GT(angle_between(eye.optical_axis(), target - eye.cornea_center()), 5 * kDeg);
+}
+
+TEST(ModelGaze, ThePupilsImageAndTheTrueCentreGiveTheTruePupilAndAxis) {
+  const GazeRig s;
+  for (const ScreenPoint& target : s.screen.grid(4, 4)) {
+    const Eye eye = Eye::fixating(s.eye, s.home, s.screen.at(target));
+    const std::optional<GazeFeatures> f = exact_gaze_features(s.view(s.home, target));
+    ASSERT_TRUE(f);
+    const std::optional<OpticalAxis> axis =
+        optical_axis_from_pupil(s.rig.cameras[0], eye.cornea_center(), f->pupil_center, s.tracker_eye());
+    ASSERT_TRUE(axis);
+    EXPECT_LT(distance(axis->pupil_center, eye.pupil_center()), 1e-8);
+    EXPECT_LT(angle_between(axis->direction, eye.optical_axis()), 1e-9);
+  }
+}
+
+// Gaze errors over a 16 x 16 screen grid with the eye rotating about
+// `center`, for an estimator of the screen point from a frame's features.
+Errors errors_over_grid(const GazeRig& s, const Point3& center, PupilCenterFeature feature,
+                        const std::function<std::optional<ScreenPoint>(const GazeFeatures&)>& estimate) {
+  Errors e;
+  double sum = 0;
+  int counted = 0;
+  for (const ScreenPoint& target : s.screen.grid(16, 16)) {
+    const std::optional<GazeFeatures> f = exact_gaze_features(s.view(center, target), feature);
+    const std::optional<ScreenPoint> p = f ? estimate(*f) : std::nullopt;
+    if (!p) {
+      ++e.missing;
+      continue;
+    }
+    const double error = error_deg(s, center, target, *p);
+    sum += error;
+    ++counted;
+    e.max_deg = std::max(e.max_deg, error);
+  }
+  e.mean_deg = counted > 0 ? sum / counted : 0;
+  return e;
+}
+
+Errors model_errors(const GazeRig& s, const GazeEyeModel& model, const Point3& center, PupilCenterFeature feature) {
+  return errors_over_grid(s, center, feature, [&](const GazeFeatures& f) -> std::optional<ScreenPoint> {
+    const ModelGaze g = estimate_model_gaze(s.rig.cameras[0], s.rig.illuminators, f, model, s.screen, center);
+    if (!g.valid) return std::nullopt;
+    return g.on_screen;
+  });
+}
+
+const std::vector<std::pair<std::string, Vector3>> kHeadMoves{
+    {"home", {0, 0, 0}}, {"sideways", {100, 0, 0}}, {"back", {0, 0, 100}}};
+
+void record(const std::string& name, const Errors& e) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.3g", e.mean_deg);
+  ::testing::Test::RecordProperty(name + "_mean_deg", text);
+  std::snprintf(text, sizeof text, "%.3g", e.max_deg);
+  ::testing::Test::RecordProperty(name + "_max_deg", text);
+}
+
+GazeEyeModel calibrated(const GazeRig& s, PupilCenterFeature feature, bool fit_pupil_depth = false) {
+  std::vector<GazeFeatures> frames;
+  std::vector<Point3> targets;
+  for (const ScreenPoint& target : s.screen.grid(3, 3)) {
+    const std::optional<GazeFeatures> f = exact_gaze_features(s.view(s.home, target), feature);
+    EXPECT_TRUE(f);
+    frames.push_back(*f);
+    targets.push_back(s.screen.at(target));
+  }
+  ModelGazeCalibrationSettings settings;
+  settings.fit_pupil_depth = fit_pupil_depth;
+  GazeEyeModel start = s.tracker_eye();
+  if (fit_pupil_depth) start.pupil_depth_mm += 0.5;
+  const ModelGazeCalibration c =
+      calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, frames, targets, start, s.home, settings);
+  EXPECT_TRUE(c.converged);
+  return c.model;
+}
+
+TEST(ModelGaze, CalibrationFindsKappaAndThePupilsDepthFromNineTargets) {
+  const GazeRig s;
+  const GazeEyeModel kappa_only = calibrated(s, PupilCenterFeature::refracted_center);
+  EXPECT_NEAR(kappa_only.kappa_horizontal_rad, 5 * kDeg, 1e-9);
+  EXPECT_NEAR(kappa_only.kappa_vertical_rad, 1.5 * kDeg, 1e-9);
+  const GazeEyeModel with_depth = calibrated(s, PupilCenterFeature::refracted_center, true);
+  EXPECT_NEAR(with_depth.kappa_horizontal_rad, 5 * kDeg, 1e-8);
+  EXPECT_NEAR(with_depth.kappa_vertical_rad, 1.5 * kDeg, 1e-8);
+  EXPECT_NEAR(with_depth.pupil_depth_mm, 4.2, 1e-6);
+}
+
+TEST(ModelGaze, ExactFeaturesGiveGazeWithinAHundredthOfADegreeAsTheHeadMoves) {
+  const GazeRig s;
+  const GazeEyeModel model = calibrated(s, PupilCenterFeature::refracted_center);
+  for (const auto& [name, move] : kHeadMoves) {
+    const Errors e = model_errors(s, model, s.home + move, PupilCenterFeature::refracted_center);
+    EXPECT_EQ(e.missing, 0) << name;
+    EXPECT_LT(e.max_deg, 0.01) << name;
+    record(name, e);
+  }
+}
+
+// A detector reports the imaged outline's centre, not the image of the
+// pupil's centre: the model-based method then errs by their difference
+// (some 0.05 px, which the pupil's 4 mm lever turns into tenths of a
+// degree).
+TEST(ModelGaze, TheOutlinesCentreCostsAccuracyThatIsReported) {
+  const GazeRig s;
+  const GazeEyeModel model = calibrated(s, PupilCenterFeature::ellipse_center);
+  for (const auto& [name, move] : kHeadMoves) {
+    const Errors e = model_errors(s, model, s.home + move, PupilCenterFeature::ellipse_center);
+    EXPECT_EQ(e.missing, 0) << name;
+    EXPECT_GT(e.mean_deg, 0.01) << name;
+    EXPECT_LT(e.max_deg, 1.0) << name;
+    record(name, e);
+  }
+}
+
+TEST(PolynomialGaze, ErrsLittleAtTheCalibrationPositionAndMoreAsTheHeadMoves) {
+  const GazeRig s;
+  std::vector<GazeFeatures> frames;
+  const std::vector<ScreenPoint> targets = s.screen.grid(3, 3);
+  for (const ScreenPoint& target : targets) {
+    frames.push_back(*exact_gaze_features(s.view(s.home, target), PupilCenterFeature::ellipse_center));
+  }
+  const PolynomialGaze polynomial = PolynomialGaze::calibrate(frames, targets);
+  std::map<std::string, Errors> by_move;
+  for (const auto& [name, move] : kHeadMoves) {
+    by_move[name] = errors_over_grid(s, s.home + move, PupilCenterFeature::ellipse_center,
+                                     [&](const GazeFeatures& f) { return polynomial.estimate(f); });
+    EXPECT_EQ(by_move[name].missing, 0) << name;
+    record(name, by_move[name]);
+  }
+  EXPECT_LT(by_move["home"].mean_deg, 1.0);
+  EXPECT_GT(by_move["sideways"].mean_deg, 2 * by_move["home"].mean_deg);
+  EXPECT_GT(by_move["back"].mean_deg, 2 * by_move["home"].mean_deg);
+}
+
+TEST(PolynomialGaze, RefusesTooFewOrDegenerateFrames) {
+  GazeFeatures f;
+  Glint g;
+  g.centre = {10, 10};
+  g.illuminator = 0;
+  f.glints = {g};
+  f.pupil_center = {12, 11};
+  const std::vector<GazeFeatures> same(9, f);
+  EXPECT_THROW(PolynomialGaze::calibrate(same, std::vector<ScreenPoint>(9)), std::invalid_argument);
+  EXPECT_THROW(PolynomialGaze::calibrate(std::vector<GazeFeatures>(5, f), std::vector<ScreenPoint>(5)),
+               std::invalid_argument);
+  EXPECT_THROW(PolynomialGaze::calibrate(same, std::vector<ScreenPoint>(8)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace purkinje::trackers

@@ -1,0 +1,157 @@
+#pragma once
+// Gaze estimation (the calibration issue): where on a screen an eye looks,
+// from one camera frame's features, by two methods, each calibrated on
+// fixation targets:
+//  - model-based: the glints give the cornea's centre (fit_cornea), the
+//    pupil's centre seen through the cornea gives the optical axis, kappa
+//    turns that into the visual axis, which meets the screen;
+//  - the classic second-order polynomial from the pupil-glint vector to
+//    the screen.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "purkinje/models/camera.h"
+#include "purkinje/models/illuminator.h"
+#include "purkinje/models/truth.h"
+#include "purkinje/trackers/glints.h"
+
+namespace purkinje::trackers {
+
+// A point on a screen, mm from its top-left corner: x along the rows, y
+// down the columns.
+struct ScreenPoint {
+  double x_mm = 0, y_mm = 0;
+};
+
+struct Screen {
+  Point3 top_left;                                // world mm
+  UnitVector3 right = UnitVector3::unit_x();      // along the rows
+  UnitVector3 down = UnitVector3::unit_y();       // down the columns, perpendicular to right
+  double width_mm = 0, height_mm = 0;
+
+  Point3 at(const ScreenPoint& p) const;
+  // Where the ray from `origin` along `direction` meets the screen's plane
+  // (beyond its edges too); nullopt when it runs parallel to the plane or
+  // away from it.
+  std::optional<ScreenPoint> hit(const Point3& origin, const Vector3& direction) const;
+  // The centres of an n x m grid of equal cells over the screen, row by row.
+  std::vector<ScreenPoint> grid(int columns, int rows) const;
+};
+
+// One frame's features, as a tracker gives them.
+struct GazeFeatures {
+  std::vector<Glint> glints;  // those with their light told count
+  Pixel pupil_center;         // the pupil's centre as imaged through the cornea
+};
+
+// Which pupil centre exact features carry: the image of the pupil's
+// centre itself (what the model-based method assumes), or the centre of
+// the ellipse fitted to the imaged outline (what a pupil detector reports;
+// refraction and perspective move it from the former).
+enum class PupilCenterFeature { refracted_center, ellipse_center };
+
+// A perfect tracker's features from a view's truth (glints on the cornea,
+// each told its light); nullopt when the pupil's chosen centre is not
+// seen.
+std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view,
+                                                PupilCenterFeature pupil = PupilCenterFeature::refracted_center);
+
+// The tracker's eye for the model-based method: a spherical cornea with
+// one refracting surface, the pupil's centre on the optical axis.
+struct GazeEyeModel {
+  double cornea_radius_mm = 7.8;
+  double pupil_depth_mm = 4.2;       // from the cornea's centre to the pupil's, along the optical axis
+  double refractive_index = 1.3375;  // behind the anterior cornea
+  // As EyeModel: the visual axis in the eye frame of the optical axis.
+  double kappa_horizontal_rad = 0;
+  double kappa_vertical_rad = 0;
+};
+
+// The visual axis for an optical axis and kappa, in the frame convention
+// of purkinje's eyes (world_from_eye_rotation).
+UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double kappa_horizontal_rad, double kappa_vertical_rad);
+
+struct ModelGaze {
+  Point3 cornea_center;
+  Point3 pupil_center;
+  UnitVector3 optical_axis = UnitVector3::unit_z();
+  UnitVector3 visual_axis = UnitVector3::unit_z();
+  std::optional<ScreenPoint> on_screen;  // where the visual axis from the cornea's centre meets it
+  bool valid = false;                    // false: the fields above are not to be used; see warnings
+  std::vector<std::string> warnings;
+};
+
+// The pupil's centre and the optical axis from the cornea's centre and the
+// pupil's imaged centre: the camera ray refracted at the cornea meets the
+// sphere of radius pupil_depth_mm about the centre. nullopt when the ray
+// misses the cornea or that sphere.
+struct OpticalAxis {
+  Point3 pupil_center;
+  UnitVector3 direction = UnitVector3::unit_z();
+};
+std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
+                                                   const Pixel& pupil_center, const GazeEyeModel& model);
+
+// The whole model-based estimate for one frame. `start`: a guess of the
+// cornea's centre for the glint fit.
+ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
+                              const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
+                              const Point3& start);
+
+struct ModelGazeCalibrationSettings {
+  bool fit_pupil_depth = false;   // with kappa
+  bool fit_cornea_radius = false;  // from all frames' glints together
+  double pixel_noise_px = 0.1;    // of the glints, for the cornea fit's covariance
+};
+
+struct ModelGazeCalibration {
+  GazeEyeModel model;  // with the fitted values
+  // Row-major covariance of (kappa horizontal, kappa vertical[, pupil
+  // depth]) in rad and mm, from the residuals' scatter about the fit;
+  // empty when the targets do not determine them.
+  std::vector<double> covariance;
+  double cornea_radius_sd_mm = 0;  // when fitted
+  double rms_error_rad = 0;        // angle between the visual axes and the targets, after the fit
+  std::vector<Point3> cornea_centers;  // per frame
+  bool converged = false;
+  std::vector<std::string> warnings;
+};
+
+// Calibrates kappa (and, if asked, the pupil's depth and the cornea's
+// radius) from frames of the eye fixating known world points. `initial`
+// gives the fixed values and the starts. Throws std::invalid_argument when
+// frames and targets differ in number or there are fewer targets than
+// unknowns.
+ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
+                                          const std::vector<GazeFeatures>& frames,
+                                          const std::vector<Point3>& targets, const GazeEyeModel& initial,
+                                          const Point3& start,
+                                          const ModelGazeCalibrationSettings& settings = {});
+
+// The classic interpolation method: the screen point as a second-order
+// polynomial in the pupil-glint vector (the pupil's imaged centre less the
+// mean of the glints with their light told), fitted by least squares.
+class PolynomialGaze {
+ public:
+  // Needs at least 6 frames whose vectors are not degenerate (on one
+  // conic); throws std::invalid_argument otherwise, or when frames and
+  // targets differ in number.
+  static PolynomialGaze calibrate(const std::vector<GazeFeatures>& frames, const std::vector<ScreenPoint>& targets);
+  // nullopt when the frame has no glint with its light told.
+  std::optional<ScreenPoint> estimate(const GazeFeatures& features) const;
+  double rms_residual_mm() const { return rms_residual_mm_; }  // at the calibration targets
+
+ private:
+  // x and y: coefficients of 1, dx, dy, dx dy, dx^2, dy^2 (dx, dy scaled).
+  std::array<double, 6> x_{}, y_{};
+  double scale_px_ = 1;
+  double rms_residual_mm_ = 0;
+};
+
+// The pupil-glint vector of a frame, px; nullopt without a told glint.
+std::optional<Pixel> pupil_glint_vector(const GazeFeatures& features);
+
+}  // namespace purkinje::trackers

@@ -1,0 +1,321 @@
+#include "purkinje/trackers/gaze.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "purkinje/models/eye.h"
+#include "purkinje/models/optimizer.h"
+#include "purkinje/trackers/cornea.h"
+#include "purkinje/trackers/scoring.h"
+
+namespace purkinje::trackers {
+
+namespace {
+
+// The nearer point where a ray meets a sphere, as the distance along the
+// ray (> 0); nullopt when it passes by or the sphere is behind.
+std::optional<double> enter_sphere(const Point3& origin, const Vector3& direction, const Point3& center,
+                                   double radius) {
+  const Vector3 from = origin - center;
+  const double b = dot(direction, from);
+  const double discriminant = b * b - (from.squared_norm() - radius * radius);
+  if (!(discriminant >= 0)) return std::nullopt;
+  const double s = -b - std::sqrt(discriminant);
+  if (!(s > 0)) return std::nullopt;
+  return s;
+}
+
+// Two unit vectors across a direction, for angular residuals about it.
+std::pair<Vector3, Vector3> across(const UnitVector3& d) {
+  const Vector3 axis = std::abs(d.x()) < 0.9 ? Vector3{1, 0, 0} : Vector3{0, 1, 0};
+  const Vector3 u = cross(d, axis) / cross(d, axis).norm();
+  return {u, cross(d, u)};
+}
+
+}  // namespace
+
+Point3 Screen::at(const ScreenPoint& p) const { return top_left + p.x_mm * right + p.y_mm * down; }
+
+std::optional<ScreenPoint> Screen::hit(const Point3& origin, const Vector3& direction) const {
+  const Vector3 normal = cross(right, down);
+  const double along = dot(direction, normal);
+  if (!(std::abs(along) > 1e-12 * direction.norm())) return std::nullopt;
+  const double s = dot(top_left - origin, normal) / along;
+  if (!(s > 0)) return std::nullopt;
+  const Vector3 offset = (origin + s * direction) - top_left;
+  return ScreenPoint{dot(offset, right), dot(offset, down)};
+}
+
+std::vector<ScreenPoint> Screen::grid(int columns, int rows) const {
+  if (columns < 1 || rows < 1) {
+    throw std::invalid_argument("Screen::grid: " + std::to_string(columns) + " x " + std::to_string(rows) +
+                                ": needs at least one column and one row");
+  }
+  std::vector<ScreenPoint> points;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < columns; ++c) {
+      points.push_back({(c + 0.5) * width_mm / columns, (r + 0.5) * height_mm / rows});
+    }
+  }
+  return points;
+}
+
+std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view, PupilCenterFeature pupil) {
+  const Detections exact = exact_detections({view});
+  GazeFeatures f;
+  f.glints = exact.glints;
+  if (pupil == PupilCenterFeature::ellipse_center) {
+    if (exact.pupils.empty()) return std::nullopt;
+    f.pupil_center = exact.pupils.front().centre;
+  } else {
+    if (view.pupil.refracted_center_status != PathStatus::ok) return std::nullopt;
+    f.pupil_center = view.pupil.refracted_center;
+  }
+  return f;
+}
+
+UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double h, double v) {
+  const Vector3 in_eye{std::sin(h) * std::cos(v), std::sin(v), std::cos(h) * std::cos(v)};
+  return UnitVector3::normalize(world_from_eye_rotation(optical_axis) * in_eye);
+}
+
+std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
+                                                   const Pixel& pupil_center, const GazeEyeModel& model) {
+  const UnitVector3 ray = camera.back_project(pupil_center);
+  const Point3 o = camera.center();
+  const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, model.cornea_radius_mm);
+  if (!to_cornea) return std::nullopt;
+  const Point3 entry = o + *to_cornea * ray;
+  const Vector3 normal = (entry - cornea_center) / model.cornea_radius_mm;
+  // Snell's law in vector form, from air into the eye.
+  const double eta = 1 / model.refractive_index;
+  const double cos_in = -dot(normal, ray);
+  const double sin2_out = eta * eta * (1 - cos_in * cos_in);
+  const Vector3 inside = eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal;
+  const std::optional<double> to_pupil = enter_sphere(entry, inside, cornea_center, model.pupil_depth_mm);
+  if (!to_pupil) return std::nullopt;
+  const Point3 pupil = entry + *to_pupil * inside;
+  const std::optional<UnitVector3> axis = UnitVector3::try_normalize(pupil - cornea_center);
+  if (!axis) return std::nullopt;
+  return OpticalAxis{pupil, *axis};
+}
+
+ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
+                              const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
+                              const Point3& start) {
+  ModelGaze out;
+  CorneaFitSettings settings;
+  settings.cornea_radius_mm = model.cornea_radius_mm;
+  const CorneaFit cornea = estimate_cornea_center(camera, lights, features.glints, start, settings);
+  out.warnings = cornea.warnings;
+  out.cornea_center = cornea.centers.front();
+  if (!cornea.converged || !cornea.has_covariance()) {
+    out.warnings.push_back("no gaze: the cornea's centre is not determined by the glints");
+    return out;
+  }
+  const std::optional<OpticalAxis> axis = optical_axis_from_pupil(camera, out.cornea_center, features.pupil_center, model);
+  if (!axis) {
+    out.warnings.push_back("no gaze: the pupil's ray misses the model's cornea or pupil");
+    return out;
+  }
+  out.pupil_center = axis->pupil_center;
+  out.optical_axis = axis->direction;
+  out.visual_axis = visual_axis_for(axis->direction, model.kappa_horizontal_rad, model.kappa_vertical_rad);
+  out.on_screen = screen.hit(out.cornea_center, out.visual_axis);
+  out.valid = true;
+  return out;
+}
+
+ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
+                                          const std::vector<GazeFeatures>& frames,
+                                          const std::vector<Point3>& targets, const GazeEyeModel& initial,
+                                          const Point3& start, const ModelGazeCalibrationSettings& settings) {
+  const int n = settings.fit_pupil_depth ? 3 : 2;
+  if (frames.size() != targets.size()) {
+    throw std::invalid_argument("calibrate_model_gaze: " + std::to_string(frames.size()) + " frames but " +
+                                std::to_string(targets.size()) + " targets: must be as many");
+  }
+  if (2 * static_cast<int>(frames.size()) < n + 1) {
+    throw std::invalid_argument("calibrate_model_gaze: " + std::to_string(frames.size()) +
+                                " targets: too few for the unknowns");
+  }
+  ModelGazeCalibration out;
+  out.model = initial;
+
+  // The cornea first, from the glints alone: its centres do not depend on
+  // kappa or the pupil's depth.
+  std::vector<GlintObservation> glints;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    for (const Glint& g : frames[f].glints) {
+      if (g.illuminator >= 0) glints.push_back({static_cast<int>(f), 0, g.illuminator, g.centre});
+    }
+  }
+  CorneaFitSettings cornea_settings;
+  cornea_settings.cornea_radius_mm = initial.cornea_radius_mm;
+  cornea_settings.fit_radius = settings.fit_cornea_radius;
+  cornea_settings.pixel_noise_px = settings.pixel_noise_px;
+  const CorneaFit cornea =
+      fit_cornea({camera}, lights, glints, std::vector<Point3>(frames.size(), start), cornea_settings);
+  out.warnings = cornea.warnings;
+  out.cornea_centers = cornea.centers;
+  if (!cornea.converged || !cornea.has_covariance()) {
+    out.warnings.push_back("not calibrated: the glints do not determine the cornea");
+    return out;
+  }
+  out.model.cornea_radius_mm = cornea.cornea_radius_mm;
+  out.cornea_radius_sd_mm = cornea.radius_sd_mm();
+
+  const int m = 2 * static_cast<int>(frames.size());
+  std::vector<std::pair<Vector3, Vector3>> bases;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const std::optional<UnitVector3> want = UnitVector3::try_normalize(targets[f] - cornea.centers[f]);
+    if (!want) throw std::invalid_argument("calibrate_model_gaze: target " + std::to_string(f) + " is at the eye");
+    bases.push_back(across(*want));
+  }
+  // Residuals: the visual axis across the direction to each target, about
+  // the angle between them in radians.
+  const auto predict = [&](const double* x, double* r) {
+    GazeEyeModel model = out.model;
+    model.kappa_horizontal_rad = x[0];
+    model.kappa_vertical_rad = x[1];
+    if (settings.fit_pupil_depth) model.pupil_depth_mm = x[2];
+    if (!(model.pupil_depth_mm > 0 && model.pupil_depth_mm < model.cornea_radius_mm)) return false;
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      const std::optional<OpticalAxis> axis =
+          optical_axis_from_pupil(camera, cornea.centers[f], frames[f].pupil_center, model);
+      if (!axis) return false;
+      const UnitVector3 v = visual_axis_for(axis->direction, x[0], x[1]);
+      r[2 * f] = dot(v, bases[f].first);
+      r[2 * f + 1] = dot(v, bases[f].second);
+    }
+    return true;
+  };
+  std::vector<double> plus(m), minus(m);
+  const optimizer::ResidualFunction residuals = [&](const double* x, double* r, double* jacobian) {
+    if (!predict(x, r)) return false;
+    if (jacobian == nullptr) return true;
+    for (int k = 0; k < n; ++k) {
+      // Central differences: the chain is smooth, and 1e-7 keeps the
+      // truncation (h^2) and rounding (eps / h) errors near 1e-10.
+      const double h = k < 2 ? 1e-7 : 1e-6;
+      std::vector<double> xp(x, x + n), xm(x, x + n);
+      xp[k] += h, xm[k] -= h;
+      if (!predict(xp.data(), plus.data()) || !predict(xm.data(), minus.data())) return false;
+      for (int i = 0; i < m; ++i) jacobian[i * n + k] = (plus[i] - minus[i]) / (2 * h);
+    }
+    return true;
+  };
+  std::vector<double> x{initial.kappa_horizontal_rad, initial.kappa_vertical_rad};
+  if (settings.fit_pupil_depth) x.push_back(initial.pupil_depth_mm);
+  optimizer::Options options;
+  options.parameter_tolerance = 1e-12;
+  options.function_tolerance = 1e-14;
+  const optimizer::Summary summary = optimizer::solve(m, x, residuals, options);
+  out.converged = summary.converged;
+  out.model.kappa_horizontal_rad = x[0];
+  out.model.kappa_vertical_rad = x[1];
+  if (settings.fit_pupil_depth) out.model.pupil_depth_mm = x[2];
+
+  std::vector<double> r(m), jacobian(static_cast<std::size_t>(m) * n);
+  if (!residuals(x.data(), r.data(), jacobian.data())) {
+    out.converged = false;
+    out.warnings.push_back("not calibrated: a pupil's ray misses the model at the estimate (" + summary.message + ")");
+    return out;
+  }
+  double sum = 0;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    // The residuals are the sine of the angle to the target, split in two.
+    const double angle = std::asin(std::min(1.0, std::hypot(r[2 * f], r[2 * f + 1])));
+    sum += angle * angle;
+  }
+  out.rms_error_rad = std::sqrt(sum / frames.size());
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(jacobian.data(), m, n);
+  const Eigen::MatrixXd normal = j.transpose() * j;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  const double lo = eigen.eigenvalues()(0), hi = eigen.eigenvalues()(n - 1);
+  if (!(lo > 0 && hi / lo < 1e12)) {
+    out.warnings.push_back("the targets do not determine kappa and the pupil's depth apart: spread them over the screen");
+  } else if (m > n) {
+    double rss = 0;
+    for (const double e : r) rss += e * e;
+    const Eigen::MatrixXd covariance = rss / (m - n) * normal.inverse();
+    out.covariance.assign(covariance.data(), covariance.data() + n * n);
+  }
+  if (!out.converged) out.warnings.push_back("the calibration stopped before converging: " + summary.message);
+  return out;
+}
+
+std::optional<Pixel> pupil_glint_vector(const GazeFeatures& features) {
+  double u = 0, v = 0;
+  int count = 0;
+  for (const Glint& g : features.glints) {
+    if (g.illuminator < 0) continue;
+    u += g.centre.u, v += g.centre.v;
+    ++count;
+  }
+  if (count == 0) return std::nullopt;
+  return Pixel{features.pupil_center.u - u / count, features.pupil_center.v - v / count};
+}
+
+PolynomialGaze PolynomialGaze::calibrate(const std::vector<GazeFeatures>& frames,
+                                         const std::vector<ScreenPoint>& targets) {
+  if (frames.size() != targets.size()) {
+    throw std::invalid_argument("PolynomialGaze::calibrate: " + std::to_string(frames.size()) + " frames but " +
+                                std::to_string(targets.size()) + " targets: must be as many");
+  }
+  if (frames.size() < 6) {
+    throw std::invalid_argument("PolynomialGaze::calibrate: " + std::to_string(frames.size()) +
+                                " frames: a second-order polynomial needs at least 6");
+  }
+  std::vector<Pixel> vectors;
+  double scale = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::optional<Pixel> d = pupil_glint_vector(frames[i]);
+    if (!d) {
+      throw std::invalid_argument("PolynomialGaze::calibrate: frame " + std::to_string(i) +
+                                  " has no glint with its light told");
+    }
+    vectors.push_back(*d);
+    scale = std::max({scale, std::abs(d->u), std::abs(d->v)});
+  }
+  PolynomialGaze out;
+  out.scale_px_ = scale > 0 ? scale : 1;  // the basis on [-1, 1], for a well-conditioned fit
+  const int count = static_cast<int>(frames.size());
+  Eigen::MatrixXd a(count, 6);
+  Eigen::VectorXd bx(count), by(count);
+  for (int i = 0; i < count; ++i) {
+    const double x = vectors[i].u / out.scale_px_, y = vectors[i].v / out.scale_px_;
+    a.row(i) << 1, x, y, x * y, x * x, y * y;
+    bx[i] = targets[i].x_mm;
+    by[i] = targets[i].y_mm;
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
+  if (qr.rank() < 6) {
+    throw std::invalid_argument(
+        "PolynomialGaze::calibrate: the pupil-glint vectors are degenerate for a second-order polynomial "
+        "(rank " + std::to_string(qr.rank()) + " of 6): spread the targets over the screen");
+  }
+  const Eigen::VectorXd cx = qr.solve(bx), cy = qr.solve(by);
+  for (int k = 0; k < 6; ++k) out.x_[k] = cx[k], out.y_[k] = cy[k];
+  const Eigen::VectorXd ex = a * cx - bx, ey = a * cy - by;
+  out.rms_residual_mm_ = std::sqrt((ex.squaredNorm() + ey.squaredNorm()) / count);
+  return out;
+}
+
+std::optional<ScreenPoint> PolynomialGaze::estimate(const GazeFeatures& features) const {
+  const std::optional<Pixel> d = pupil_glint_vector(features);
+  if (!d) return std::nullopt;
+  const double x = d->u / scale_px_, y = d->v / scale_px_;
+  const double basis[6] = {1, x, y, x * y, x * x, y * y};
+  ScreenPoint p;
+  for (int k = 0; k < 6; ++k) {
+    p.x_mm += x_[k] * basis[k];
+    p.y_mm += y_[k] * basis[k];
+  }
+  return p;
+}
+
+}  // namespace purkinje::trackers

@@ -513,6 +513,28 @@ Illuminator read_illuminator(Object& l, std::size_t index) {
   return out;
 }
 
+// ----------------------------------------------------------------- screen
+
+// What the eye looks at: centre and size, rows along `right` and columns
+// along `down` (by default world +x and +y, a screen facing an eye that
+// looks along -z, as the bundled scenes have it).
+Screen read_screen(Object& s) {
+  const Point3 center = s.get<Point3>("center_mm");
+  const Value size = s.required("size_mm", "the width and height in mm, [w, h]");
+  const std::vector<double> wh = size.as_numbers(2);
+  if (!(wh[0] > 0 && wh[1] > 0)) size.fail("width and height must be > 0");
+  const auto right_value = s.optional("right");
+  const auto down_value = s.optional("down");
+  const Vector3 right = right_value ? right_value->direction() : Vector3{1, 0, 0};
+  const Vector3 down = down_value ? down_value->direction() : Vector3{0, 1, 0};
+  s.finish();
+  const UnitVector3 r = UnitVector3::normalize(right), d = UnitVector3::normalize(down);
+  if (!(std::abs(dot(r, d)) < 1e-6)) {
+    (down_value ? *down_value : right_value ? *right_value : size).fail("right and down must be perpendicular");
+  }
+  return Screen::centered(center, wh[0], wh[1], r, d);
+}
+
 // ----------------------------------------------------------------- meshes
 
 // A mesh file placed in the world: world = position + R (scale * file),
@@ -1000,6 +1022,7 @@ Scene parse_scene(const std::string& text, const std::string& source_name,
     check_unique(scene.illuminators.back().name, l);
     check_outside_eyes(scene, scene.illuminators.back().position, l.where().child("position_mm"));
   }
+  if (auto screen = root.optional_object("screen")) scene.screen = read_screen(*screen);
   // Meshes last: their files are read only once the rest of the scene is
   // known to be good.
   std::set<std::string> mesh_names;

@@ -135,6 +135,45 @@ TEST(SceneFile, FillsDefaultsFromThePresetAndTheFileName) {
   EXPECT_NEAR(scene.eyes[0].optical_axis().z(), -1.0, 1e-15);
 }
 
+// A minimal valid scene with a screen block.
+std::string scene_with_screen(const std::string& screen) {
+  return R"({ "format": 1,
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ],
+    "screen": )" + screen + " }";
+}
+
+TEST(SceneFile, ReadsAScreenByItsCentreAndSize) {
+  const Scene none =
+      parse_scene(scene_with_eye(R"({ "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} })"), "s.json");
+  EXPECT_FALSE(none.screen);
+  const Scene scene = parse_scene(scene_with_screen(R"({ "center_mm": [0, -182, 0], "size_mm": [518, 324] })"), "s.json");
+  ASSERT_TRUE(scene.screen);
+  // Centre less half the width along +x and half the height along +y.
+  EXPECT_EQ(scene.screen->top_left, (Point3{-259, -344, 0}));
+  EXPECT_EQ(scene.screen->width_mm, 518);
+  EXPECT_EQ(scene.screen->height_mm, 324);
+  const Point3 centre = scene.screen->center();
+  EXPECT_NEAR(distance(centre, {0, -182, 0}), 0, 1e-12);
+  // A turned screen: rows along -z, columns along +y.
+  const Scene turned = parse_scene(
+      scene_with_screen(R"({ "center_mm": [300, 0, 500], "size_mm": [100, 50], "right": [0, 0, -2], "down": [0, 1, 0] })"), "s.json");
+  EXPECT_EQ(turned.screen->top_left, (Point3{300, -25, 550}));
+}
+
+TEST(SceneFile, RejectsBadScreensByKey) {
+  EXPECT_NE(parse_error(scene_with_screen(R"({ "center_mm": [0, 0, 0], "size_mm": [0, 3] })"))
+                .find("size_mm"), std::string::npos);
+  EXPECT_NE(parse_error(scene_with_screen(R"({ "center_mm": [0, 0, 0], "size_mm": [4] })"))
+                .find("must be an array of 2 numbers"), std::string::npos);
+  EXPECT_NE(parse_error(scene_with_screen(R"({ "center_mm": [0, 0, 0], "size_mm": [4, 3], "down": [1, 1, 0] })"))
+                .find("perpendicular"), std::string::npos);
+  EXPECT_NE(parse_error(scene_with_screen(R"({ "size_mm": [4, 3] })")).find("center_mm"), std::string::npos);
+  EXPECT_NE(parse_error(scene_with_screen(R"({ "center_mm": [0, 0, 0], "size_mm": [4, 3], "tilt": 1 })"))
+                .find("tilt"), std::string::npos);
+}
+
 TEST(SceneFile, DefaultIlluminatorValuesMatchTheStruct) {
   const Scene scene = parse_scene(R"({ "format": 1,
     "cameras": [ { "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,

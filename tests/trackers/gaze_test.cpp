@@ -14,6 +14,7 @@
 #include <functional>
 #include <map>
 #include <numbers>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -81,24 +82,6 @@ struct Errors {
   double mean_deg = 0, max_deg = 0;
   int missing = 0;
 };
-
-TEST(Screen, PlacesAndHitsPointsByHand) {
-  const Screen screen{{-100, -50, 0}, UnitVector3::unit_x(), UnitVector3::unit_y(), 200, 100};
-  const Point3 p = screen.at({30, 20});
-  EXPECT_EQ(p, (Point3{-70, -30, 0}));
-  // From (0, 0, 600) toward (-70, -30, 0).
-  const std::optional<ScreenPoint> hit = screen.hit({0, 0, 600}, Vector3{-70, -30, -600});
-  ASSERT_TRUE(hit);
-  EXPECT_NEAR(hit->x_mm, 30, 1e-12);
-  EXPECT_NEAR(hit->y_mm, 20, 1e-12);
-  EXPECT_FALSE(screen.hit({0, 0, 600}, Vector3{0, 0, 1}));  // looking away
-  EXPECT_FALSE(screen.hit({0, 0, 600}, Vector3{1, 0, 0}));  // along the plane
-  const std::vector<ScreenPoint> grid = screen.grid(2, 2);
-  ASSERT_EQ(grid.size(), 4u);
-  EXPECT_DOUBLE_EQ(grid[1].x_mm, 150);
-  EXPECT_DOUBLE_EQ(grid[2].y_mm, 75);
-  EXPECT_THROW(screen.grid(0, 3), std::invalid_argument);
-}
 
 // The eye's own fixation solver puts its visual axis through the target:
 // the tracker's kappa convention must agree with it.
@@ -221,6 +204,47 @@ TEST(ModelGaze, TheOutlinesCentreCostsAccuracyThatIsReported) {
     EXPECT_GT(e.mean_deg, 0.01) << name;
     EXPECT_LT(e.max_deg, 1.0) << name;
     record(name, e);
+  }
+}
+
+// The uncertainty a gaze estimate reports against its scatter over 1000
+// draws of feature noise (0.1 px on glints, 0.05 px on the pupil): within
+// 20% along the screen's axes.
+TEST(ModelGaze, ReportedUncertaintyMatchesTheScatterUnderFeatureNoise) {
+  const GazeRig s;
+  GazeEyeModel model = s.tracker_eye();
+  model.kappa_horizontal_rad = s.eye.kappa_horizontal_rad;
+  model.kappa_vertical_rad = s.eye.kappa_vertical_rad;
+  const ScreenPoint target{120, 80};
+  const GazeFeatures exact = *exact_gaze_features(s.view(s.home, target));
+  const FeatureNoise noise{0.1, 0.05};
+  const ModelGaze at_truth = estimate_model_gaze(s.rig.cameras[0], s.rig.illuminators, exact, model, s.screen, s.home, noise);
+  ASSERT_TRUE(at_truth.valid);
+  std::mt19937 random(5);
+  std::normal_distribution<double> glint(0, noise.glint_px), pupil(0, noise.pupil_px);
+  constexpr int kDraws = 1000;
+  double sum[2] = {0, 0}, sum2[2] = {0, 0}, reported[2] = {0, 0};
+  for (int draw = 0; draw < kDraws; ++draw) {
+    GazeFeatures f = exact;
+    for (Glint& g : f.glints) g.centre = {g.centre.u + glint(random), g.centre.v + glint(random)};
+    f.pupil_center = {f.pupil_center.u + pupil(random), f.pupil_center.v + pupil(random)};
+    const ModelGaze g = estimate_model_gaze(s.rig.cameras[0], s.rig.illuminators, f, model, s.screen, s.home, noise);
+    ASSERT_TRUE(g.valid && g.on_screen);
+    const double xy[2] = {g.on_screen->x_mm, g.on_screen->y_mm};
+    for (int k = 0; k < 2; ++k) {
+      sum[k] += xy[k];
+      sum2[k] += xy[k] * xy[k];
+      reported[k] += g.on_screen_covariance_mm2[3 * k] / kDraws;
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    const double mean = sum[k] / kDraws;
+    const double sd_seen = std::sqrt((sum2[k] - kDraws * mean * mean) / (kDraws - 1));
+    EXPECT_NEAR(sd_seen / std::sqrt(reported[k]), 1, 0.2) << k;
+    EXPECT_NEAR(sd_seen / std::sqrt(at_truth.on_screen_covariance_mm2[3 * k]), 1, 0.2) << k;
+    char text[64];
+    std::snprintf(text, sizeof text, "%.3g mm (reported %.3g)", sd_seen, std::sqrt(reported[k]));
+    ::testing::Test::RecordProperty(k == 0 ? "x_sd" : "y_sd", text);
   }
 }
 

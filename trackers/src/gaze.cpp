@@ -37,32 +37,6 @@ std::pair<Vector3, Vector3> across(const UnitVector3& d) {
 
 }  // namespace
 
-Point3 Screen::at(const ScreenPoint& p) const { return top_left + p.x_mm * right + p.y_mm * down; }
-
-std::optional<ScreenPoint> Screen::hit(const Point3& origin, const Vector3& direction) const {
-  const Vector3 normal = cross(right, down);
-  const double along = dot(direction, normal);
-  if (!(std::abs(along) > 1e-12 * direction.norm())) return std::nullopt;
-  const double s = dot(top_left - origin, normal) / along;
-  if (!(s > 0)) return std::nullopt;
-  const Vector3 offset = (origin + s * direction) - top_left;
-  return ScreenPoint{dot(offset, right), dot(offset, down)};
-}
-
-std::vector<ScreenPoint> Screen::grid(int columns, int rows) const {
-  if (columns < 1 || rows < 1) {
-    throw std::invalid_argument("Screen::grid: " + std::to_string(columns) + " x " + std::to_string(rows) +
-                                ": needs at least one column and one row");
-  }
-  std::vector<ScreenPoint> points;
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < columns; ++c) {
-      points.push_back({(c + 0.5) * width_mm / columns, (r + 0.5) * height_mm / rows});
-    }
-  }
-  return points;
-}
-
 std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view, PupilCenterFeature pupil) {
   const Detections exact = exact_detections({view});
   GazeFeatures f;
@@ -103,12 +77,15 @@ std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const P
   return OpticalAxis{pupil, *axis};
 }
 
-ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
-                              const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
-                              const Point3& start) {
+namespace {
+
+// The estimate without its uncertainty.
+ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& lights, const GazeFeatures& features,
+                     const GazeEyeModel& model, const Screen& screen, const Point3& start, double glint_noise_px) {
   ModelGaze out;
   CorneaFitSettings settings;
   settings.cornea_radius_mm = model.cornea_radius_mm;
+  settings.pixel_noise_px = glint_noise_px;
   const CorneaFit cornea = estimate_cornea_center(camera, lights, features.glints, start, settings);
   out.warnings = cornea.warnings;
   out.cornea_center = cornea.centers.front();
@@ -116,6 +93,7 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
     out.warnings.push_back("no gaze: the cornea's centre is not determined by the glints");
     return out;
   }
+  out.cornea_covariance_mm2 = cornea.center_covariance(0);
   const std::optional<OpticalAxis> axis = optical_axis_from_pupil(camera, out.cornea_center, features.pupil_center, model);
   if (!axis) {
     out.warnings.push_back("no gaze: the pupil's ray misses the model's cornea or pupil");
@@ -126,6 +104,50 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
   out.visual_axis = visual_axis_for(axis->direction, model.kappa_horizontal_rad, model.kappa_vertical_rad);
   out.on_screen = screen.hit(out.cornea_center, out.visual_axis);
   out.valid = true;
+  return out;
+}
+
+}  // namespace
+
+ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
+                              const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
+                              const Point3& start, const FeatureNoise& noise) {
+  ModelGaze out = model_gaze(camera, lights, features, model, screen, start, noise.glint_px);
+  if (!out.valid || !out.on_screen) return out;
+  // Each feature coordinate moved both ways by a small step; the screen
+  // point's changes give the Jacobian, and its covariance follows.
+  constexpr double step_px = 1e-3;
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
+  const auto add = [&](GazeFeatures moved_plus, GazeFeatures moved_minus, double sd_px) {
+    const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise.glint_px);
+    const ModelGaze minus = model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise.glint_px);
+    if (!plus.on_screen || !minus.on_screen) return false;
+    const Eigen::Vector2d column((plus.on_screen->x_mm - minus.on_screen->x_mm) / (2 * step_px),
+                                 (plus.on_screen->y_mm - minus.on_screen->y_mm) / (2 * step_px));
+    covariance += sd_px * sd_px * column * column.transpose();
+    return true;
+  };
+  bool ok = true;
+  for (std::size_t i = 0; i < features.glints.size() && ok; ++i) {
+    if (features.glints[i].illuminator < 0) continue;
+    for (int axis = 0; axis < 2 && ok; ++axis) {
+      GazeFeatures plus = features, minus = features;
+      (axis == 0 ? plus.glints[i].centre.u : plus.glints[i].centre.v) += step_px;
+      (axis == 0 ? minus.glints[i].centre.u : minus.glints[i].centre.v) -= step_px;
+      ok = add(plus, minus, noise.glint_px);
+    }
+  }
+  for (int axis = 0; axis < 2 && ok; ++axis) {
+    GazeFeatures plus = features, minus = features;
+    (axis == 0 ? plus.pupil_center.u : plus.pupil_center.v) += step_px;
+    (axis == 0 ? minus.pupil_center.u : minus.pupil_center.v) -= step_px;
+    ok = add(plus, minus, noise.pupil_px);
+  }
+  if (!ok) {
+    out.warnings.push_back("no uncertainty: the estimate fails for features a thousandth of a pixel away");
+    return out;
+  }
+  out.on_screen_covariance_mm2 = {covariance(0, 0), covariance(0, 1), covariance(1, 0), covariance(1, 1)};
   return out;
 }
 

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -7,6 +8,7 @@
 #include "purkinje/models/eye.h"
 #include "purkinje/models/illuminator.h"
 #include "purkinje/models/mesh.h"
+#include "purkinje/models/screen.h"
 
 namespace purkinje {
 
@@ -16,6 +18,7 @@ struct Scene {
   std::vector<Eye> eyes;
   std::vector<Illuminator> illuminators;
   std::vector<Mesh> meshes;  // optional geometry beside the eyes (glasses, occluders)
+  std::optional<Screen> screen;  // what the eye looks at, for gaze; not rendered
 };
 
 }  // namespace purkinje

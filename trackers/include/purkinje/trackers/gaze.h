@@ -15,31 +15,11 @@
 
 #include "purkinje/models/camera.h"
 #include "purkinje/models/illuminator.h"
+#include "purkinje/models/screen.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/trackers/glints.h"
 
 namespace purkinje::trackers {
-
-// A point on a screen, mm from its top-left corner: x along the rows, y
-// down the columns.
-struct ScreenPoint {
-  double x_mm = 0, y_mm = 0;
-};
-
-struct Screen {
-  Point3 top_left;                                // world mm
-  UnitVector3 right = UnitVector3::unit_x();      // along the rows
-  UnitVector3 down = UnitVector3::unit_y();       // down the columns, perpendicular to right
-  double width_mm = 0, height_mm = 0;
-
-  Point3 at(const ScreenPoint& p) const;
-  // Where the ray from `origin` along `direction` meets the screen's plane
-  // (beyond its edges too); nullopt when it runs parallel to the plane or
-  // away from it.
-  std::optional<ScreenPoint> hit(const Point3& origin, const Vector3& direction) const;
-  // The centres of an n x m grid of equal cells over the screen, row by row.
-  std::vector<ScreenPoint> grid(int columns, int rows) const;
-};
 
 // One frame's features, as a tracker gives them.
 struct GazeFeatures {
@@ -74,12 +54,24 @@ struct GazeEyeModel {
 // of purkinje's eyes (world_from_eye_rotation).
 UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double kappa_horizontal_rad, double kappa_vertical_rad);
 
+// The features' noise, for the uncertainty a gaze estimate reports:
+// standard deviations of each glint's and of the pupil's u and v.
+struct FeatureNoise {
+  double glint_px = 0.05;  // our detectors on renders: 0.03 to 0.04 px (docs/trackers.md)
+  double pupil_px = 0.05;
+};
+
 struct ModelGaze {
   Point3 cornea_center;
+  // Row-major, mm^2, of the cornea's centre from the glints' noise.
+  std::array<double, 9> cornea_covariance_mm2{};
   Point3 pupil_center;
   UnitVector3 optical_axis = UnitVector3::unit_z();
   UnitVector3 visual_axis = UnitVector3::unit_z();
   std::optional<ScreenPoint> on_screen;  // where the visual axis from the cornea's centre meets it
+  // Row-major 2 x 2, mm^2, of on_screen (x, y) from the features' noise,
+  // by first-order propagation (central differences through the method).
+  std::array<double, 4> on_screen_covariance_mm2{};
   bool valid = false;                    // false: the fields above are not to be used; see warnings
   std::vector<std::string> warnings;
 };
@@ -95,11 +87,11 @@ struct OpticalAxis {
 std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
                                                    const Pixel& pupil_center, const GazeEyeModel& model);
 
-// The whole model-based estimate for one frame. `start`: a guess of the
-// cornea's centre for the glint fit.
+// The whole model-based estimate for one frame, with its uncertainty.
+// `start`: a guess of the cornea's centre for the glint fit.
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
-                              const Point3& start);
+                              const Point3& start, const FeatureNoise& noise = {});
 
 struct ModelGazeCalibrationSettings {
   bool fit_pupil_depth = false;   // with kappa

@@ -1,9 +1,14 @@
 #pragma once
 // The subcommands that read images and score detectors (`purkinje track`,
-// `purkinje score`): argument parsing stays in purkinje.cpp.
+// `purkinje score`) and calibrate gaze (`purkinje calibrate`): argument
+// parsing stays in purkinje.cpp.
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
+
+#include "purkinje/trackers/gaze.h"
 
 namespace purkinje::tools {
 
@@ -24,7 +29,20 @@ struct ScoreRequest : ScoreOutput {
   std::string detections_file;
 };
 
+struct CalibrateRequest {
+  std::string scene_file;  // with a screen; its eye is the one followed
+  std::string output_dir;
+  int grid = 8;              // test targets: grid x grid over the screen, at each head position
+  int calibration_grid = 3;  // calibration targets, at the scene's eye position
+  std::vector<std::array<double, 3>> head_moves;  // mm, test positions beside the scene's
+  bool fit_radius = false;
+  bool fit_pupil_depth = false;
+  trackers::FeatureNoise noise;  // the detectors' noise, for the reported uncertainty
+  std::uint64_t seed = 1;       // of the first frame's render; each next frame the next
+};
+
 int run_track(const TrackRequest& request);
+int run_calibrate(const CalibrateRequest& request);
 int run_score(const ScoreRequest& request);
 
 }  // namespace purkinje::tools

@@ -13,6 +13,7 @@
 #include <iostream>
 #include <mutex>
 #include <numbers>
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -365,6 +366,44 @@ int run(int argc, char** argv) {
   score->add_option("--detections", score_request.detections_file, "Detections file (CSV)")->required();
   add_score_output_options(*score, score_request);
 
+  purkinje::tools::CalibrateRequest calibrate_request;
+  std::vector<std::string> head_moves;
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Render the eye fixating targets on the scene's screen, detect, calibrate gaze, score");
+  calibrate->footer(std::string("The scene needs a \"screen\" (docs/scene-format.md). Its eye fixates a\n"
+                                "calibration grid, then a test grid at its own place and at each head move;\n"
+                                "each frame is rendered and read by purkinje's detectors. The model-based method\n"
+                                "and the second-order polynomial are calibrated and scored against the truth.\n"
+                                "Writes DIR/calibration.txt, calibration.json, frames.csv and gaze_error.png\n"
+                                "(docs/calibration.md).\n\n") +
+                    kExitCodes);
+  calibrate->add_option("SCENE", calibrate_request.scene_file, "Scene file with a screen")->required();
+  calibrate->add_option("-o,--output", calibrate_request.output_dir, "Output folder (created if missing)")
+      ->required();
+  calibrate->add_option("--grid", calibrate_request.grid, "Test targets: N x N over the screen")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  calibrate->add_option("--calibration-grid", calibrate_request.calibration_grid,
+                        "Calibration targets: N x N over the screen")
+      ->check(CLI::Range(3, 16))
+      ->capture_default_str();
+  calibrate->add_option("--head-move", head_moves,
+                        "A test position beside the scene's, as the eye's move \"x,y,z\" in mm (repeatable),\n"
+                        "e.g. --head-move 100,0,0 --head-move 0,0,100");
+  calibrate->add_flag("--fit-radius", calibrate_request.fit_radius,
+                      "Fit the cornea's radius from all calibration frames' glints");
+  calibrate->add_flag("--fit-pupil-depth", calibrate_request.fit_pupil_depth,
+                      "Fit the pupil's depth behind the cornea's centre with kappa");
+  calibrate->add_option("--glint-noise", calibrate_request.noise.glint_px,
+                        "The glint detector's noise (s.d., px), for the reported uncertainty")
+      ->check(CLI::Range(1e-6, 10.0))
+      ->capture_default_str();
+  calibrate->add_option("--pupil-noise", calibrate_request.noise.pupil_px,
+                        "The pupil detector's noise (s.d., px), for the reported uncertainty")
+      ->check(CLI::Range(1e-6, 10.0))
+      ->capture_default_str();
+  calibrate->add_option("--seed", calibrate_request.seed, "Render seed of the first frame")->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -375,6 +414,20 @@ int run(int argc, char** argv) {
   if (*render) return run_render(render_request);
   if (*track) return purkinje::tools::run_track(track_request);
   if (*score) return purkinje::tools::run_score(score_request);
+  if (*calibrate) {
+    for (const std::string& move : head_moves) {
+      std::array<double, 3> m{};
+      char comma1 = 0, comma2 = 0;
+      std::istringstream in(move);
+      if (!(in >> m[0] >> comma1 >> m[1] >> comma2 >> m[2]) || comma1 != ',' || comma2 != ',' || !in.eof() ||
+          !std::isfinite(m[0]) || !std::isfinite(m[1]) || !std::isfinite(m[2])) {
+        std::cerr << "purkinje calibrate: --head-move \"" << move << "\": must be three numbers \"x,y,z\" in mm\n";
+        return kUsageError;
+      }
+      calibrate_request.head_moves.push_back(m);
+    }
+    return purkinje::tools::run_calibrate(calibrate_request);
+  }
   return kUsageError;  // unreachable: a subcommand is required
 }
 

@@ -36,8 +36,9 @@ std::optional<ScreenPoint> Screen::hit(const Point3& origin, const Vector3& dire
 
 std::vector<ScreenPoint> Screen::grid(int columns, int rows) const {
   if (columns < 1 || rows < 1) {
-    throw std::invalid_argument("Screen::grid: " + std::to_string(columns) + " x " + std::to_string(rows) +
-                                ": needs at least one column and one row");
+    std::ostringstream out;
+    out << "Screen::grid: " << columns << " x " << rows << ": needs at least one column and one row";
+    throw std::invalid_argument(out.str());
   }
   std::vector<ScreenPoint> points;
   for (int r = 0; r < rows; ++r) {

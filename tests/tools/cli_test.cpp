@@ -178,7 +178,8 @@ TEST_F(Cli, WritesJsonToStandardOutputWithoutOutputOption) {
 }
 
 TEST_F(Cli, HelpExitsZeroForTheProgramAndEverySubcommand) {
-  for (const char* arguments : {"--help", "truth --help", "render --help", "track --help", "score --help"}) {
+  for (const char* arguments :
+       {"--help", "truth --help", "render --help", "track --help", "score --help", "calibrate --help"}) {
     EXPECT_EQ(run(arguments), 0) << arguments;
     EXPECT_NE(out().find("Usage"), std::string::npos) << arguments << ": " << out();
     EXPECT_NE(out().find("Exit codes"), std::string::npos) << arguments << ": " << out();
@@ -435,4 +436,48 @@ TEST_F(Cli, ScoreNamesTheLineOfAMalformedDetectionAndWritesNothing) {
 
   EXPECT_EQ(run("track " + quoted(root_.string() + "/nowhere") + " -o " + quoted(scored.string())), 1);
   EXPECT_NE(err().find("nowhere"), std::string::npos) << err();
+}
+
+// The calibration end to end on the headset: renders, detects, calibrates
+// and scores, writing a table, its JSON, the frames and the gaze map.
+TEST_F(Cli, CalibrateWritesItsTableFramesAndGazeMap) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/headset.json").string());
+  ASSERT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --grid 3 --fit-radius"), 0) << err();
+  for (const char* name : {"calibration.txt", "calibration.json", "frames.csv", "gaze_error.png"}) {
+    EXPECT_TRUE(fs::exists(output_dir_ / name)) << name;
+  }
+  const json results = json::parse(read(output_dir_ / "calibration.json"));
+  ASSERT_EQ(results["runs"].size(), 4u);  // calibration and home, each by both methods
+  const json& calibration = results["runs"][0];
+  EXPECT_EQ(calibration["case"], "calibration");
+  EXPECT_EQ(calibration["results"]["frames_used"], 9);
+  EXPECT_NEAR(calibration["results"]["cornea_radius"].get<double>(), 7.8, 0.2);  // the scene's
+  const json& home = results["runs"][2];
+  EXPECT_EQ(home["case"], "home");
+  EXPECT_EQ(home["results"]["gaze_frames"], 9);
+  EXPECT_LT(home["results"]["gaze_error_mean"].get<double>(), 1.0);  // degrees
+  EXPECT_EQ(home["units"]["gaze_error_mean"], "deg");
+  // One line per test frame, with the header.
+  const std::string frames = read(output_dir_ / "frames.csv");
+  EXPECT_EQ(std::count(frames.begin(), frames.end(), '\n'), 10);
+  EXPECT_FALSE(mentions_non_finite(frames + read(output_dir_ / "calibration.txt")));
+  EXPECT_EQ(read(output_dir_ / "gaze_error.png").substr(1, 3), "PNG");
+  EXPECT_NE(out().find("gaze_error_mean"), std::string::npos);
+}
+
+TEST_F(Cli, CalibrateRefusesASceneWithoutAScreenAndBadHeadMoves) {
+  const fs::path no_screen = root_ / "no_screen.json";
+  std::ofstream(no_screen) << R"({ "format": 1,
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "illuminators": [ { "position_mm": [-100, 0, 0] }, { "position_mm": [100, 0, 0] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ] })";
+  EXPECT_EQ(run("calibrate " + quoted(no_screen.string()) + " -o " + quoted(output_dir_.string())), 1);
+  EXPECT_NE(err().find("no \"screen\" block"), std::string::npos) << err();
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --head-move 100,0"), 2);
+  EXPECT_NE(err().find("--head-move \"100,0\""), std::string::npos) << err();
+  EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --grid 0"), 2);
+  EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --glint-noise 0"), 2);
+  EXPECT_TRUE(output_dir_entries().empty());
 }

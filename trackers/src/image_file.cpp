@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -146,6 +147,73 @@ void write_overlay(const std::filesystem::path& file, const GreyImage& image,
               cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   std::vector<unsigned char> png;
   if (!cv::imencode(".png", colour, png)) throw std::runtime_error(file.string() + ": the overlay cannot be encoded");
+  write_file_atomically(file, std::string(png.begin(), png.end()));
+}
+
+void write_gaze_map(const std::filesystem::path& file, const Screen& screen, const std::vector<std::string>& methods,
+                    const std::vector<GazeMapPanel>& panels, double magnify) {
+  if (panels.empty() || !(screen.width_mm > 0 && screen.height_mm > 0) || !(magnify >= 0)) {
+    throw std::runtime_error(file.string() + ": no gaze map to draw (no panels, an empty screen or magnify < 0)");
+  }
+  // Each panel 480 px across the screen, with a margin for arrows that
+  // leave it and a title above.
+  const double scale = 480 / screen.width_mm;  // px per mm
+  if (magnify == 0) {
+    // The largest 1-2-5 step that keeps the longest arrow within 60 px.
+    double longest_px = 0;
+    for (const GazeMapPanel& panel : panels) {
+      for (const auto& method : panel.estimates) {
+        for (std::size_t t = 0; t < method.size() && t < panel.targets.size(); ++t) {
+          if (!method[t]) continue;
+          longest_px = std::max(longest_px, scale * std::hypot(method[t]->x_mm - panel.targets[t].x_mm,
+                                                               method[t]->y_mm - panel.targets[t].y_mm));
+        }
+      }
+    }
+    magnify = 1;
+    for (double decade = 1; decade <= 1e6; decade *= 10) {
+      for (const double step : {1.0, 2.0, 5.0}) {
+        if (longest_px * step * decade <= 60) magnify = step * decade;
+      }
+    }
+  }
+  const int margin = 40, title = 28, legend = 24;
+  const int panel_w = static_cast<int>(std::lround(screen.width_mm * scale)) + 2 * margin;
+  const int panel_h = static_cast<int>(std::lround(screen.height_mm * scale)) + 2 * margin + title;
+  cv::Mat canvas(panel_h + legend, panel_w * static_cast<int>(panels.size()), CV_8UC3, cv::Scalar(255, 255, 255));
+  const cv::Scalar colours[] = {{0, 0, 220}, {220, 60, 0}, {0, 150, 0}, {160, 0, 160}};
+  const auto to_px = [&](int panel, const ScreenPoint& p) {
+    return cv::Point2d(panel * panel_w + margin + p.x_mm * scale, title + margin + p.y_mm * scale);
+  };
+  for (std::size_t k = 0; k < panels.size(); ++k) {
+    const int i = static_cast<int>(k);
+    const GazeMapPanel& panel = panels[k];
+    cv::rectangle(canvas, to_px(i, {0, 0}), to_px(i, {screen.width_mm, screen.height_mm}), cv::Scalar(0, 0, 0), 1);
+    cv::putText(canvas, panel.title, {i * panel_w + margin, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
+    for (std::size_t t = 0; t < panel.targets.size(); ++t) {
+      const cv::Point2d target = to_px(i, panel.targets[t]);
+      for (std::size_t m = 0; m < panel.estimates.size() && m < 4; ++m) {
+        if (t >= panel.estimates[m].size() || !panel.estimates[m][t]) continue;
+        const ScreenPoint& e = *panel.estimates[m][t];
+        const ScreenPoint tip{panel.targets[t].x_mm + magnify * (e.x_mm - panel.targets[t].x_mm),
+                              panel.targets[t].y_mm + magnify * (e.y_mm - panel.targets[t].y_mm)};
+        cv::arrowedLine(canvas, target, to_px(i, tip), colours[m], 1, cv::LINE_AA, 0, 0.2);
+      }
+      cv::circle(canvas, target, 2, cv::Scalar(0, 0, 0), cv::FILLED, cv::LINE_AA);
+    }
+  }
+  std::string key;
+  for (std::size_t m = 0; m < methods.size() && m < 4; ++m) {
+    key += (m == 0 ? "" : ", ") + std::string(m == 0 ? "red " : m == 1 ? "blue " : m == 2 ? "green " : "purple ") +
+           methods[m];
+  }
+  char text[64];
+  std::snprintf(text, sizeof text, "; arrows x%g", magnify);
+  cv::putText(canvas, key + text, {6, canvas.rows - 8}, cv::FONT_HERSHEY_PLAIN, 1.0, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", canvas, png)) throw std::runtime_error(file.string() + ": the gaze map cannot be encoded");
   write_file_atomically(file, std::string(png.begin(), png.end()));
 }
 

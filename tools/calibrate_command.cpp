@@ -1,0 +1,336 @@
+// `purkinje calibrate`: the calibration issue end to end. The scene's eye
+// fixates targets on the scene's screen; each frame is rendered and read
+// by purkinje's detectors; the model-based method and the polynomial are
+// calibrated on a grid of targets and then estimate gaze over a finer
+// grid, at the calibration position and after the head moves; every
+// estimate is scored against the scene's truth. Documented in docs/cli.md
+// and docs/calibration.md.
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "purkinje/models/labels.h"
+#include "purkinje/models/scene_file.h"
+#include "purkinje/renderer/render.h"
+#include "purkinje/trackers/cornea.h"
+#include "purkinje/trackers/gaze.h"
+#include "purkinje/trackers/glints.h"
+#include "purkinje/trackers/image.h"
+#include "purkinje/trackers/image_file.h"
+#include "purkinje/trackers/pupil.h"
+#include "purkinje/trackers/simulation.h"
+
+namespace purkinje::tools {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kDegree = std::numbers::pi / 180;
+
+// One rendered frame: the eye fixating a target from a head position.
+struct Frame {
+  std::string position;  // "home" or the head move
+  ScreenPoint target;
+  Point3 cornea_center;                 // truth
+  std::optional<trackers::GazeFeatures> found;  // from the image; nullopt: a glint or the pupil missed
+  int glints_told = 0;
+};
+
+std::string format(double value, int digits = 4) {
+  std::ostringstream out;
+  out.precision(digits);
+  out << value;
+  return out.str();
+}
+
+// Renders the eye fixating `target` from rotation centre `center` and
+// reads the image with the detectors.
+Frame render_frame(const Scene& rig, const Point3& center, const std::string& position, const ScreenPoint& target,
+                   const std::vector<std::optional<Pixel>>& layout, std::uint64_t seed) {
+  Frame f{position, target, {}, std::nullopt, 0};
+  Scene scene = rig;
+  const Eye& nominal = rig.eyes.front();
+  Eye eye = Eye::fixating(nominal.model(), center, rig.screen->at(target));
+  eye.set_appearance(nominal.appearance());
+  scene.eyes = {eye};
+  f.cornea_center = eye.cornea_center();
+  renderer::RenderOptions options;
+  options.seed = seed;
+  const renderer::RenderResult result = renderer::render(scene, 0, options);
+  const trackers::GreyView image = trackers::grey_view(std::span<const std::uint16_t>(result.sensor.values), result.sensor.width,
+                                             result.sensor.height, result.sensor.bits);
+  std::vector<trackers::Glint> glints = trackers::BlobGlintDetector().detect(image);
+  trackers::identify_glints(glints, layout);
+  const std::optional<trackers::PupilDetection> pupil = trackers::StarburstPupilDetector().detect(image, glints);
+  for (const trackers::Glint& g : glints) f.glints_told += g.illuminator >= 0 ? 1 : 0;
+  if (pupil && f.glints_told >= 2) f.found = trackers::GazeFeatures{glints, pupil->ellipse.center};
+  return f;
+}
+
+// Summaries of one method at one head position.
+struct Tally {
+  std::vector<double> errors_deg;
+  int missing = 0;
+  int within_3sd_x = 0, within_3sd_y = 0, with_sd = 0;
+};
+
+void add_errors(trackers::Results& r, const std::string& prefix, const Tally& t) {
+  std::vector<double> e = t.errors_deg;
+  std::sort(e.begin(), e.end());
+  r.add(prefix + "frames", static_cast<double>(e.size()));
+  r.add(prefix + "frames_without_estimate", static_cast<double>(t.missing));
+  if (e.empty()) return;
+  double sum = 0;
+  for (const double x : e) sum += x;
+  r.add(prefix + "error_mean", sum / e.size(), "deg");
+  r.add(prefix + "error_median", e[e.size() / 2], "deg");
+  r.add(prefix + "error_p95", e[std::min(e.size() - 1, static_cast<std::size_t>(0.95 * e.size()))], "deg");
+  r.add(prefix + "error_max", e.back(), "deg");
+  if (t.with_sd > 0) {
+    r.add(prefix + "within_3sd_screen_x", 100.0 * t.within_3sd_x / t.with_sd, "%");
+    r.add(prefix + "within_3sd_screen_y", 100.0 * t.within_3sd_y / t.with_sd, "%");
+  }
+}
+
+}  // namespace
+
+int run_calibrate(const CalibrateRequest& request) {
+  Scene rig;
+  try {
+    rig = load_scene(request.scene_file);
+    if (!rig.screen) {
+      throw std::runtime_error(request.scene_file + ": no \"screen\" block: calibration needs the screen the eye "
+                               "looks at (docs/scene-format.md)");
+    }
+    if (rig.illuminators.size() < 2) {
+      throw std::runtime_error(request.scene_file + ": " + std::to_string(rig.illuminators.size()) +
+                               " illuminator(s): the cornea's centre needs the glints of two or more");
+    }
+    if (rig.eyes.size() != 1) {
+      throw std::runtime_error(request.scene_file + ": " + std::to_string(rig.eyes.size()) +
+                               " eyes: calibration follows one eye");
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+  const Camera& camera = rig.cameras.front();
+  const Screen& screen = *rig.screen;
+  const Point3 home = rig.eyes.front().rotation_center();
+  // The tracker knows its rig and a nominal eye: the classic one-surface
+  // sphere, and where the rig's lights put glints on the scene's eye.
+  const trackers::GazeEyeModel nominal;
+  const std::vector<std::optional<Pixel>> layout =
+      trackers::nominal_glint_layout(camera, rig.illuminators, rig.eyes.front());
+
+  std::vector<std::pair<std::string, Point3>> positions{{"home", home}};
+  for (const std::array<double, 3>& m : request.head_moves) {
+    positions.push_back({"moved " + format(m[0]) + "," + format(m[1]) + "," + format(m[2]) + " mm",
+                         home + Vector3{m[0], m[1], m[2]}});
+  }
+  std::vector<Frame> calibration, tests;
+  std::uint64_t seed = request.seed;
+  try {
+    for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
+      calibration.push_back(render_frame(rig, home, "home", t, layout, seed++));
+    }
+    for (const auto& [name, center] : positions) {
+      for (const ScreenPoint& t : screen.grid(request.grid, request.grid)) {
+        tests.push_back(render_frame(rig, center, name, t, layout, seed++));
+      }
+    }
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+
+  // Calibration on the frames whose features were all found.
+  std::vector<trackers::GazeFeatures> features;
+  std::vector<Point3> targets;
+  std::vector<ScreenPoint> screen_targets;
+  for (const Frame& f : calibration) {
+    if (!f.found) continue;
+    features.push_back(*f.found);
+    targets.push_back(screen.at(f.target));
+    screen_targets.push_back(f.target);
+  }
+  if (features.size() < 6) {
+    std::cerr << "purkinje calibrate: error: the detectors found glints and pupil in " << features.size() << " of "
+              << calibration.size() << " calibration frames: at least 6 are needed\n";
+    return kBadInput;
+  }
+  trackers::ModelGazeCalibrationSettings settings;
+  settings.fit_cornea_radius = request.fit_radius;
+  settings.fit_pupil_depth = request.fit_pupil_depth;
+  settings.pixel_noise_px = request.noise.glint_px;
+  trackers::ModelGazeCalibration model;
+  std::optional<trackers::PolynomialGaze> polynomial;
+  try {
+    model = trackers::calibrate_model_gaze(camera, rig.illuminators, features, targets, nominal, home, settings);
+    polynomial = trackers::PolynomialGaze::calibrate(features, screen_targets);
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
+    return kBadInput;
+  }
+
+  std::vector<trackers::SimulationRun> runs;
+  {
+    trackers::SimulationRun run{"calibration", "model-based", {}, std::nullopt};
+    trackers::Results& r = run.results;
+    r.add("frames_used", static_cast<double>(features.size()));
+    r.add("frames_rendered", static_cast<double>(calibration.size()));
+    r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
+    r.add("kappa_vertical", model.model.kappa_vertical_rad / kDegree, "deg");
+    r.add("kappa_true_horizontal", rig.eyes.front().model().kappa_horizontal_rad / kDegree, "deg");
+    r.add("kappa_true_vertical", rig.eyes.front().model().kappa_vertical_rad / kDegree, "deg");
+    if (model.covariance.size() >= 4) {
+      r.add("kappa_horizontal_sd", std::sqrt(model.covariance[0]) / kDegree, "deg");
+      const int n = request.fit_pupil_depth ? 3 : 2;
+      r.add("kappa_vertical_sd", std::sqrt(model.covariance[n + 1]) / kDegree, "deg");
+      if (request.fit_pupil_depth) r.add("pupil_depth_sd", std::sqrt(model.covariance[8]), "mm");
+    }
+    r.add("pupil_depth", model.model.pupil_depth_mm, "mm");
+    r.add("cornea_radius", model.model.cornea_radius_mm, "mm");
+    if (request.fit_radius) r.add("cornea_radius_sd", model.cornea_radius_sd_mm, "mm");
+    r.add("cornea_radius_true", rig.eyes.front().model().anterior_cornea.radius_mm, "mm");
+    r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
+    std::string warnings;
+    for (const std::string& w : model.warnings) warnings += (warnings.empty() ? "" : "; ") + w;
+    r.add("warnings", warnings.empty() ? std::string("none") : warnings);
+    runs.push_back(std::move(run));
+  }
+  {
+    trackers::SimulationRun run{"calibration", "polynomial", {}, std::nullopt};
+    run.results.add("frames_used", static_cast<double>(features.size()));
+    run.results.add("rms_residual_at_targets", polynomial->rms_residual_mm(), "mm");
+    runs.push_back(std::move(run));
+  }
+
+  // Every test frame by both methods, scored against the truth.
+  std::ostringstream csv;
+  csv << "position,target_x_mm,target_y_mm,glints_told,pupil_found,cornea_lateral_error_mm,cornea_depth_error_mm,"
+         "cornea_depth_sd_mm,model_x_mm,model_y_mm,model_sd_x_mm,model_sd_y_mm,model_error_deg,polynomial_x_mm,"
+         "polynomial_y_mm,polynomial_error_deg\n";
+  std::vector<trackers::GazeMapPanel> panels;
+  for (const auto& [name, center] : positions) {
+    Tally model_tally, polynomial_tally;
+    std::vector<double> lateral, depth;
+    int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
+    trackers::GazeMapPanel panel{name, {}, {{}, {}}};
+    for (const Frame& f : tests) {
+      if (f.position != name) continue;
+      panel.targets.push_back(f.target);
+      const auto error_deg = [&](const ScreenPoint& p) {
+        return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
+      };
+      csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
+          << (f.found ? 1 : 0);
+      std::optional<ScreenPoint> by_model, by_polynomial;
+      if (f.found) {
+        const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
+                                                                    screen, f.cornea_center, request.noise);
+        // The cornea's error split along the camera's line of sight and across it.
+        const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
+        const Vector3 e = g.cornea_center - f.cornea_center;
+        const double along = dot(e, sight);
+        const double across = (e - along * sight).norm();
+        double depth_var = 0;
+        for (int a = 0; a < 3; ++a) {
+          for (int b = 0; b < 3; ++b) depth_var += sight[a] * g.cornea_covariance_mm2[3 * a + b] * sight[b];
+        }
+        // Lateral s.d.: the covariance across the line of sight, along the error.
+        double lateral_var = 0;
+        if (across > 0) {
+          const Vector3 l = (e - along * sight) / across;
+          for (int a = 0; a < 3; ++a) {
+            for (int b = 0; b < 3; ++b) lateral_var += l[a] * g.cornea_covariance_mm2[3 * a + b] * l[b];
+          }
+        }
+        csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var);
+        if (g.valid) {
+          lateral.push_back(across);
+          depth.push_back(along);
+          ++cornea_with_sd;
+          depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
+          lateral_within += across <= 3 * std::sqrt(lateral_var) ? 1 : 0;
+        }
+        if (g.valid && g.on_screen) {
+          by_model = g.on_screen;
+          const double sx = std::sqrt(g.on_screen_covariance_mm2[0]), sy = std::sqrt(g.on_screen_covariance_mm2[3]);
+          model_tally.errors_deg.push_back(error_deg(*by_model));
+          ++model_tally.with_sd;
+          model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
+          model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
+          csv << ',' << by_model->x_mm << ',' << by_model->y_mm << ',' << sx << ',' << sy << ','
+              << model_tally.errors_deg.back();
+        } else {
+          ++model_tally.missing;
+          csv << ",,,,,";
+        }
+        by_polynomial = polynomial->estimate(*f.found);
+      } else {
+        ++model_tally.missing;
+        csv << ",,,,,,,,";
+      }
+      if (by_polynomial) {
+        polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));
+        csv << ',' << by_polynomial->x_mm << ',' << by_polynomial->y_mm << ',' << polynomial_tally.errors_deg.back();
+      } else {
+        ++polynomial_tally.missing;
+        csv << ",,,";
+      }
+      csv << '\n';
+      panel.estimates[0].push_back(by_model);
+      panel.estimates[1].push_back(by_polynomial);
+    }
+    trackers::SimulationRun m{name, "model-based", {}, std::nullopt};
+    add_errors(m.results, "gaze_", model_tally);
+    if (!depth.empty()) {
+      double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
+      for (std::size_t i = 0; i < depth.size(); ++i) {
+        sum_lateral += lateral[i];
+        sum_depth += depth[i];
+        sum_depth2 += depth[i] * depth[i];
+      }
+      const double n = static_cast<double>(depth.size());
+      m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
+      m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
+      m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
+      m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
+      m.results.add("cornea_within_3sd_lateral", 100.0 * lateral_within / cornea_with_sd, "%");
+    }
+    runs.push_back(std::move(m));
+    trackers::SimulationRun p{name, "polynomial", {}, std::nullopt};
+    add_errors(p.results, "gaze_", polynomial_tally);
+    runs.push_back(std::move(p));
+    panels.push_back(std::move(panel));
+  }
+
+  const fs::path dir(request.output_dir);
+  const std::string text = trackers::simulation_text(runs);
+  try {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
+    write_file_atomically(dir / "calibration.txt", text);
+    write_file_atomically(dir / "calibration.json", trackers::simulation_json(runs));
+    write_file_atomically(dir / "frames.csv", csv.str());
+    trackers::write_gaze_map(dir / "gaze_error.png", screen, {"model-based", "polynomial"}, panels);
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
+    return kOutputError;
+  }
+  std::cout << text << "\nwrote " << (dir / "calibration.txt").string()
+            << ", calibration.json, frames.csv and gaze_error.png\n";
+  return kOk;
+}
+
+}  // namespace purkinje::tools

@@ -121,9 +121,10 @@ BENCHMARK(BM_CorneaCenterRemoteNoisy)->Unit(benchmark::kMicrosecond);
 
 // A 9-point gaze calibration (the calibration issue's bar: at most 10
 // ms): the bundled remote rig and screen, a one-surface spherical eye with
-// kappa fixating a 3 x 3 grid, exact features with 0.1 px of noise on the
-// glints and 0.05 px on the pupil; the model-based method (cornea over the
-// nine frames, then kappa) and the polynomial.
+// kappa fixating a 3 x 3 grid, exact features (the pupil's outline, 36
+// points) with 0.1 px of noise on the glints and 0.05 px on the pupil; the
+// model-based method (cornea over the nine frames, then kappa) and the
+// polynomial.
 std::vector<GazeFeatures> nine_frames(const Scene& rig, EyeModel& eye, std::vector<Point3>& targets,
                                       std::vector<ScreenPoint>& on_screen) {
   eye = keratometric_eye();
@@ -138,7 +139,10 @@ std::vector<GazeFeatures> nine_frames(const Scene& rig, EyeModel& eye, std::vect
     s.eyes = {Eye::fixating(eye, rig.eyes[0].rotation_center(), rig.screen->at(t))};
     GazeFeatures f = *exact_gaze_features(compute_truth(s).views.front());
     for (Glint& g : f.glints) g.centre = {g.centre.u + glint(random), g.centre.v + glint(random)};
-    f.pupil_center = {f.pupil_center.u + pupil(random), f.pupil_center.v + pupil(random)};
+    // The pupil moves as a whole: its centre and its outline.
+    const double du = pupil(random), dv = pupil(random);
+    f.pupil_center = {f.pupil_center.u + du, f.pupil_center.v + dv};
+    for (Pixel& p : f.pupil_outline) p = {p.u + du, p.v + dv};
     frames.push_back(f);
     targets.push_back(rig.screen->at(t));
   }

@@ -71,7 +71,9 @@ Frame render_frame(const Scene& rig, const Point3& center, const std::string& po
   trackers::identify_glints(glints, layout);
   const std::optional<trackers::PupilDetection> pupil = trackers::StarburstPupilDetector().detect(image, glints);
   for (const trackers::Glint& g : glints) f.glints_told += g.illuminator >= 0 ? 1 : 0;
-  if (pupil && f.glints_told >= 2) f.found = trackers::GazeFeatures{glints, pupil->ellipse.center};
+  if (pupil && f.glints_told >= 2) {
+    f.found = trackers::GazeFeatures{glints, pupil->ellipse.center, trackers::ellipse_outline(pupil->ellipse)};
+  }
   return f;
 }
 
@@ -264,7 +266,8 @@ int run_calibrate(const CalibrateRequest& request) {
         }
         if (g.valid && g.on_screen) {
           by_model = g.on_screen;
-          const double sx = std::sqrt(g.on_screen_covariance_mm2[0]), sy = std::sqrt(g.on_screen_covariance_mm2[3]);
+          const std::array<double, 4> c = g.on_screen_covariance_mm2.value_or(std::array<double, 4>{});
+          const double sx = std::sqrt(c[0]), sy = std::sqrt(c[3]);
           model_tally.errors_deg.push_back(error_deg(*by_model));
           ++model_tally.with_sd;
           model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;

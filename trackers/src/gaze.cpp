@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include "purkinje/models/eye.h"
@@ -37,16 +38,33 @@ std::pair<Vector3, Vector3> across(const UnitVector3& d) {
 
 }  // namespace
 
-std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view, PupilCenterFeature pupil) {
+std::vector<Pixel> ellipse_outline(const Ellipse& e, int points) {
+  std::vector<Pixel> out;
+  const double c = std::cos(e.angle_rad), s = std::sin(e.angle_rad);
+  for (int i = 0; i < points; ++i) {
+    const double t = 2 * std::numbers::pi * i / points;
+    const double a = e.semi_axis_1_px * std::cos(t), b = e.semi_axis_2_px * std::sin(t);
+    out.push_back({e.center.u + a * c - b * s, e.center.v + a * s + b * c});
+  }
+  return out;
+}
+
+std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view, PupilFeature pupil) {
   const Detections exact = exact_detections({view});
   GazeFeatures f;
   f.glints = exact.glints;
-  if (pupil == PupilCenterFeature::ellipse_center) {
+  if (pupil == PupilFeature::ellipse_center) {
     if (exact.pupils.empty()) return std::nullopt;
     f.pupil_center = exact.pupils.front().centre;
-  } else {
-    if (view.pupil.refracted_center_status != PathStatus::ok) return std::nullopt;
-    f.pupil_center = view.pupil.refracted_center;
+    return f;
+  }
+  if (view.pupil.refracted_center_status != PathStatus::ok) return std::nullopt;
+  f.pupil_center = view.pupil.refracted_center;
+  if (pupil == PupilFeature::outline) {
+    for (const PupilBorderPointTruth& b : view.pupil.border) {
+      if (b.status == PathStatus::ok) f.pupil_outline.push_back(b.pixel);
+    }
+    if (f.pupil_outline.size() < 5) return std::nullopt;
   }
   return f;
 }
@@ -77,7 +95,76 @@ std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const P
   return OpticalAxis{pupil, *axis};
 }
 
+std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera, const Point3& cornea_center,
+                                                           const std::vector<Pixel>& outline,
+                                                           const GazeEyeModel& model,
+                                                           const std::optional<UnitVector3>& start) {
+  struct Ray {
+    Point3 entry;
+    Vector3 inside;
+  };
+  std::vector<Ray> rays;
+  Vector3 middle;
+  const Point3 o = camera.center();
+  const double eta = 1 / model.refractive_index;
+  for (const Pixel& p : outline) {
+    const UnitVector3 ray = camera.back_project(p);
+    const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, model.cornea_radius_mm);
+    if (!to_cornea) continue;
+    const Point3 entry = o + *to_cornea * ray;
+    const Vector3 normal = (entry - cornea_center) / model.cornea_radius_mm;
+    const double cos_in = -dot(normal, ray);
+    const double sin2_out = eta * eta * (1 - cos_in * cos_in);
+    rays.push_back({entry, eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal});
+    middle += entry - cornea_center;
+  }
+  if (rays.size() < 5) return std::nullopt;
+  std::optional<UnitVector3> axis = UnitVector3::try_normalize(middle);
+  if (start) axis = *start;
+  if (!axis) return std::nullopt;
+  const double depth = model.pupil_depth_mm;
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    // The rays meet the plane across the axis at the pupil's depth; a
+    // circle fitted there (Kasa: linear in the centre and radius) gives
+    // the centre whatever the points' spacing.
+    const Point3 on_axis = cornea_center + depth * *axis;
+    const Vector3 reference = std::abs(axis->x()) < 0.9 ? Vector3{1, 0, 0} : Vector3{0, 1, 0};
+    const Vector3 e1 = cross(*axis, reference) / cross(*axis, reference).norm();
+    const Vector3 e2 = cross(*axis, e1);
+    Eigen::MatrixXd a(static_cast<Eigen::Index>(rays.size()), 3);
+    Eigen::VectorXd b(static_cast<Eigen::Index>(rays.size()));
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const double along = dot(rays[i].inside, *axis);
+      if (!(std::abs(along) > 1e-9)) return std::nullopt;
+      const double s = (depth - dot(rays[i].entry - cornea_center, *axis)) / along;
+      const Vector3 x = (rays[i].entry + s * rays[i].inside) - on_axis;
+      const double u = dot(x, e1), v = dot(x, e2);
+      a.row(static_cast<Eigen::Index>(i)) << 2 * u, 2 * v, 1;
+      b[static_cast<Eigen::Index>(i)] = u * u + v * v;
+    }
+    const Eigen::Vector3d fit = a.colPivHouseholderQr().solve(b);
+    if (!fit.allFinite()) return std::nullopt;
+    const Point3 center = on_axis + fit[0] * e1 + fit[1] * e2;
+    const std::optional<UnitVector3> next = UnitVector3::try_normalize(center - cornea_center);
+    if (!next) return std::nullopt;
+    const double change = angle_between(*next, *axis);
+    axis = next;
+    if (change < 1e-13) return OpticalAxis{cornea_center + depth * *axis, *axis};
+  }
+  return std::nullopt;
+}
+
 namespace {
+
+// The optical axis from the outline when the features have one, else from
+// the imaged centre.
+std::optional<OpticalAxis> pupil_axis(const Camera& camera, const Point3& cornea_center, const GazeFeatures& f,
+                                      const GazeEyeModel& model) {
+  const std::optional<OpticalAxis> from_center = optical_axis_from_pupil(camera, cornea_center, f.pupil_center, model);
+  if (f.pupil_outline.size() < 5) return from_center;
+  return optical_axis_from_pupil_outline(camera, cornea_center, f.pupil_outline, model,
+                                         from_center ? std::optional<UnitVector3>(from_center->direction) : std::nullopt);
+}
 
 // The estimate without its uncertainty.
 ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& lights, const GazeFeatures& features,
@@ -94,7 +181,7 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
     return out;
   }
   out.cornea_covariance_mm2 = cornea.center_covariance(0);
-  const std::optional<OpticalAxis> axis = optical_axis_from_pupil(camera, out.cornea_center, features.pupil_center, model);
+  const std::optional<OpticalAxis> axis = pupil_axis(camera, out.cornea_center, features, model);
   if (!axis) {
     out.warnings.push_back("no gaze: the pupil's ray misses the model's cornea or pupil");
     return out;
@@ -111,9 +198,10 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
 
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
-                              const Point3& start, const FeatureNoise& noise) {
+                              const Point3& start, const std::optional<FeatureNoise>& given_noise) {
+  const FeatureNoise noise = given_noise.value_or(FeatureNoise{});
   ModelGaze out = model_gaze(camera, lights, features, model, screen, start, noise.glint_px);
-  if (!out.valid || !out.on_screen) return out;
+  if (!given_noise || !out.valid || !out.on_screen) return out;
   // Each feature coordinate moved both ways by a small step; the screen
   // point's changes give the Jacobian, and its covariance follows.
   constexpr double step_px = 1e-3;
@@ -137,17 +225,23 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
       ok = add(plus, minus, noise.glint_px);
     }
   }
+  // The pupil moved as a whole: its centre and its outline together.
   for (int axis = 0; axis < 2 && ok; ++axis) {
     GazeFeatures plus = features, minus = features;
-    (axis == 0 ? plus.pupil_center.u : plus.pupil_center.v) += step_px;
-    (axis == 0 ? minus.pupil_center.u : minus.pupil_center.v) -= step_px;
+    const auto shift = [&](GazeFeatures& f, double by) {
+      (axis == 0 ? f.pupil_center.u : f.pupil_center.v) += by;
+      for (Pixel& p : f.pupil_outline) (axis == 0 ? p.u : p.v) += by;
+    };
+    shift(plus, step_px);
+    shift(minus, -step_px);
     ok = add(plus, minus, noise.pupil_px);
   }
   if (!ok) {
     out.warnings.push_back("no uncertainty: the estimate fails for features a thousandth of a pixel away");
     return out;
   }
-  out.on_screen_covariance_mm2 = {covariance(0, 0), covariance(0, 1), covariance(1, 0), covariance(1, 1)};
+  out.on_screen_covariance_mm2 = std::array<double, 4>{covariance(0, 0), covariance(0, 1), covariance(1, 0),
+                                                       covariance(1, 1)};
   return out;
 }
 
@@ -206,8 +300,7 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
     if (settings.fit_pupil_depth) model.pupil_depth_mm = x[2];
     if (!(model.pupil_depth_mm > 0 && model.pupil_depth_mm < model.cornea_radius_mm)) return false;
     for (std::size_t f = 0; f < frames.size(); ++f) {
-      const std::optional<OpticalAxis> axis =
-          optical_axis_from_pupil(camera, cornea.centers[f], frames[f].pupil_center, model);
+      const std::optional<OpticalAxis> axis = pupil_axis(camera, cornea.centers[f], frames[f], model);
       if (!axis) return false;
       const UnitVector3 v = visual_axis_for(axis->direction, x[0], x[1]);
       r[2 * f] = dot(v, bases[f].first);

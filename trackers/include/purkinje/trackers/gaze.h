@@ -25,19 +25,30 @@ namespace purkinje::trackers {
 struct GazeFeatures {
   std::vector<Glint> glints;  // those with their light told count
   Pixel pupil_center;         // the pupil's centre as imaged through the cornea
+  // Points on the pupil's imaged outline, when the tracker has them: with
+  // 5 or more, the model-based method takes the optical axis from the
+  // outline (optical_axis_from_pupil_outline) instead of the centre.
+  std::vector<Pixel> pupil_outline;
 };
 
-// Which pupil centre exact features carry: the image of the pupil's
-// centre itself (what the model-based method assumes), or the centre of
-// the ellipse fitted to the imaged outline (what a pupil detector reports;
-// refraction and perspective move it from the former).
-enum class PupilCenterFeature { refracted_center, ellipse_center };
+// Points around an ellipse, evenly in its parameter: a detector's pupil
+// as an outline.
+std::vector<Pixel> ellipse_outline(const Ellipse& ellipse, int points = 36);
 
-// A perfect tracker's features from a view's truth (glints on the cornea,
-// each told its light); nullopt when the pupil's chosen centre is not
-// seen.
+// What of the pupil exact features carry: its imaged outline (the truth's
+// border points) with the image of its centre; the image of the pupil's
+// own centre through the cornea alone (what the centre-based model
+// assumes); or the centre of the ellipse fitted to the imaged outline
+// alone (what a pupil detector reports as its centre; refraction and
+// perspective move it from the former).
+enum class PupilFeature { outline, refracted_center, ellipse_center };
+
+// A perfect tracker's features from a view's truth: the glints on the
+// cornea, each told its light, and the pupil as chosen; nullopt when the
+// pupil's chosen centre is not seen (or, for the outline, fewer than 5 of
+// its points).
 std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view,
-                                                PupilCenterFeature pupil = PupilCenterFeature::refracted_center);
+                                                PupilFeature pupil = PupilFeature::outline);
 
 // The tracker's eye for the model-based method: a spherical cornea with
 // one refracting surface, the pupil's centre on the optical axis.
@@ -70,8 +81,9 @@ struct ModelGaze {
   UnitVector3 visual_axis = UnitVector3::unit_z();
   std::optional<ScreenPoint> on_screen;  // where the visual axis from the cornea's centre meets it
   // Row-major 2 x 2, mm^2, of on_screen (x, y) from the features' noise,
-  // by first-order propagation (central differences through the method).
-  std::array<double, 4> on_screen_covariance_mm2{};
+  // by first-order propagation (central differences through the method);
+  // only when the noise is given.
+  std::optional<std::array<double, 4>> on_screen_covariance_mm2;
   bool valid = false;                    // false: the fields above are not to be used; see warnings
   std::vector<std::string> warnings;
 };
@@ -87,11 +99,26 @@ struct OpticalAxis {
 std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
                                                    const Pixel& pupil_center, const GazeEyeModel& model);
 
-// The whole model-based estimate for one frame, with its uncertainty.
-// `start`: a guess of the cornea's centre for the glint fit.
+// The pupil's centre and the optical axis from the pupil's imaged outline:
+// each outline point's ray, refracted at the cornea, meets the plane at
+// the pupil's depth across the axis; the axis is the one through the
+// centre of the circle those points make (a fixed point, found by
+// iteration from `start`, or the outline's middle). Unlike the imaged
+// centre, this carries no bias from refraction and perspective. nullopt
+// when fewer than 5 rays meet the cornea or the iteration does not settle.
+std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera, const Point3& cornea_center,
+                                                           const std::vector<Pixel>& outline,
+                                                           const GazeEyeModel& model,
+                                                           const std::optional<UnitVector3>& start = std::nullopt);
+
+// The whole model-based estimate for one frame, with the screen point's
+// uncertainty when `noise` is given (it costs an estimate per feature
+// coordinate, both ways). `start`: a guess of the cornea's centre for the
+// glint fit. The cornea's covariance assumes the given glint noise, or
+// FeatureNoise's default.
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
-                              const Point3& start, const FeatureNoise& noise = {});
+                              const Point3& start, const std::optional<FeatureNoise>& noise = std::nullopt);
 
 struct ModelGazeCalibrationSettings {
   bool fit_pupil_depth = false;   // with kappa

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,9 @@ struct CalibrateRequest {
   std::vector<std::array<double, 3>> head_moves;  // mm, test positions beside the scene's
   bool fit_radius = false;
   bool fit_pupil_depth = false;
-  trackers::FeatureNoise noise;  // the detectors' noise, for the reported uncertainty
+  // The detectors' noise (s.d., px) the reported uncertainties assume;
+  // absent: measured on the calibration frames against their labels.
+  std::optional<double> glint_noise_px, pupil_noise_px;
   std::uint64_t seed = 1;       // of the first frame's render; each next frame the next
 };
 

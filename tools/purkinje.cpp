@@ -394,14 +394,14 @@ int run(int argc, char** argv) {
                       "Fit the cornea's radius from all calibration frames' glints");
   calibrate->add_flag("--fit-pupil-depth", calibrate_request.fit_pupil_depth,
                       "Fit the pupil's depth behind the cornea's centre with kappa");
-  calibrate->add_option("--glint-noise", calibrate_request.noise.glint_px,
-                        "The glint detector's noise (s.d., px), for the reported uncertainty")
-      ->check(CLI::Range(1e-6, 10.0))
-      ->capture_default_str();
-  calibrate->add_option("--pupil-noise", calibrate_request.noise.pupil_px,
-                        "The pupil detector's noise (s.d., px), for the reported uncertainty")
-      ->check(CLI::Range(1e-6, 10.0))
-      ->capture_default_str();
+  calibrate->add_option("--glint-noise", calibrate_request.glint_noise_px,
+                        "The glint detector's noise (s.d., px) the uncertainties assume\n"
+                        "(default: measured on the calibration frames against their labels)")
+      ->check(CLI::Range(1e-6, 10.0));
+  calibrate->add_option("--pupil-noise", calibrate_request.pupil_noise_px,
+                        "The pupil detector's noise (s.d., px) the uncertainties assume\n"
+                        "(default: measured on the calibration frames against their labels)")
+      ->check(CLI::Range(1e-6, 10.0));
   calibrate->add_option("--seed", calibrate_request.seed, "Render seed of the first frame")->capture_default_str();
 
   try {

@@ -452,6 +452,10 @@ TEST_F(Cli, CalibrateWritesItsTableFramesAndGazeMap) {
   EXPECT_EQ(calibration["case"], "calibration");
   EXPECT_EQ(calibration["results"]["frames_used"], 9);
   EXPECT_NEAR(calibration["results"]["cornea_radius"].get<double>(), 7.8, 0.2);  // the scene's
+  // The detectors' noise, measured against the labels: some hundredths of a pixel.
+  EXPECT_EQ(calibration["results"]["glint_noise_from"], "measured");
+  EXPECT_GT(calibration["results"]["glint_noise"].get<double>(), 0.005);
+  EXPECT_LT(calibration["results"]["glint_noise"].get<double>(), 0.5);
   const json& home = results["runs"][2];
   EXPECT_EQ(home["case"], "home");
   EXPECT_EQ(home["results"]["gaze_frames"], 9);

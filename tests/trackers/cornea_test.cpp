@@ -243,6 +243,33 @@ TEST(CorneaCenter, LightsInLineWithTheCameraAndTheEyeAreFlagged) {
   EXPECT_TRUE(mentions(e, "do not determine")) << testing::PrintToString(e.warnings);
 }
 
+// A glint merged with another bright spot sits a pixel or two off: the
+// fit drops it (the worst first) while its frame keeps three or more.
+TEST(CorneaFit, RejectsAGlintFarFromTheFitAndKeepsTheRest) {
+  const Scene scene = bundled("headset");
+  std::vector<Glint> glints = exact_glints(scene);
+  ASSERT_EQ(glints.size(), 8u);
+  glints[3].centre.u += 1.5;
+  const Point3 truth = scene.eyes[0].cornea_center();
+  const CorneaFit fit = estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, truth + Vector3{1, 1, 1});
+  ASSERT_EQ(fit.rejected, std::vector<int>{3});
+  EXPECT_TRUE(mentions(fit, "rejected the glint of light " + std::to_string(glints[3].illuminator)));
+  EXPECT_LT(distance(fit.centers[0], truth), 1e-6);  // the seven left are exact
+  ASSERT_EQ(fit.glint_residuals_px.size(), 8u);
+  EXPECT_GT(fit.glint_residuals_px[3], 1.0);
+  EXPECT_LT(fit.glint_residuals_px[0], 1e-6);
+  // Off: the bad glint pulls the centre.
+  CorneaFitSettings keep_all;
+  keep_all.reject_beyond_sd = 0;
+  const CorneaFit pulled =
+      estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, truth + Vector3{1, 1, 1}, keep_all);
+  EXPECT_TRUE(pulled.rejected.empty());
+  EXPECT_GT(distance(pulled.centers[0], truth), 1e-3);
+  // Three glints cannot spare one.
+  const std::vector<Glint> three(glints.begin() + 2, glints.begin() + 5);
+  EXPECT_TRUE(estimate_cornea_center(scene.cameras[0], scene.illuminators, three, truth).rejected.empty());
+}
+
 TEST(CorneaFit, RejectsBadSettingsAndUnknownIndicesByName) {
   const Scene scene = bundled("headset");
   const std::vector<Glint> glints = exact_glints(scene);
@@ -260,6 +287,7 @@ TEST(CorneaFit, RejectsBadSettingsAndUnknownIndicesByName) {
   EXPECT_NE(message({.pixel_noise_px = 0}, fine).find("pixel_noise_px"), std::string::npos);
   EXPECT_NE(message({.radius_prior_sd_mm = -1}, fine).find("radius_prior_sd_mm = -1"), std::string::npos);
   EXPECT_NE(message({.max_sd_mm = 0}, fine).find("max_sd_mm"), std::string::npos);
+  EXPECT_NE(message({.reject_beyond_sd = -1}, fine).find("reject_beyond_sd = -1"), std::string::npos);
   EXPECT_NE(message({}, {{0, 0, 99, {1, 1}}}).find("light = 99"), std::string::npos);
   EXPECT_NE(message({}, {{0, 3, 0, {1, 1}}}).find("camera = 3"), std::string::npos);
   EXPECT_NE(message({}, {{2, 0, 0, {1, 1}}}).find("frame = 2"), std::string::npos);

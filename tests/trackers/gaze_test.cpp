@@ -188,6 +188,26 @@ TEST(ModelGaze, CalibrationFindsKappaAndThePupilsDepthFromNineTargets) {
 
 // Both exact pupils: the image of its centre, and its outline (the
 // truth's border points, through optical_axis_from_pupil_outline).
+// Two lights, one camera: each frame's four glint coordinates tell depth
+// and radius almost only through their ratio, and nine fixations move the
+// cornea too little to part them. The calibration must say so, not fit.
+TEST(ModelGaze, AFreeRadiusFromTwoLightsIsRefusedWithAWarning) {
+  const GazeRig s;
+  std::vector<GazeFeatures> frames;
+  std::vector<Point3> targets;
+  for (const ScreenPoint& target : s.screen.grid(3, 3)) {
+    frames.push_back(*exact_gaze_features(s.view(s.home, target)));
+    targets.push_back(s.screen.at(target));
+  }
+  ModelGazeCalibrationSettings settings;
+  settings.fit_cornea_radius = true;
+  const ModelGazeCalibration c =
+      calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, frames, targets, s.tracker_eye(), s.home, settings);
+  EXPECT_FALSE(c.converged);
+  ASSERT_FALSE(c.warnings.empty());
+  EXPECT_NE(c.warnings.back().find("not calibrated"), std::string::npos) << c.warnings.back();
+}
+
 TEST(ModelGaze, ExactFeaturesGiveGazeWithinAHundredthOfADegreeAsTheHeadMoves) {
   const GazeRig s;
   for (const PupilFeature feature : {PupilFeature::refracted_center, PupilFeature::outline}) {

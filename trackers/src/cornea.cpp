@@ -161,10 +161,11 @@ double CorneaFit::radius_sd_mm() const {
   return std::sqrt(covariance_mm2.back());
 }
 
-CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
-                     const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
-                     const CorneaFitSettings& s) {
-  check(s);
+namespace {
+
+CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                   const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
+                   const CorneaFitSettings& s) {
   const int frames = static_cast<int>(starts.size());
   if (frames == 0) throw std::invalid_argument("fit_cornea: no frames (starts is empty)");
   std::vector<int> per_frame(frames, 0);
@@ -270,7 +271,10 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
     return out;
   }
   double sum = 0;
-  for (int i = 0; i < 2 * static_cast<int>(glints.size()); ++i) sum += r[i] * r[i];
+  for (std::size_t i = 0; i < glints.size(); ++i) {
+    sum += r[2 * i] * r[2 * i] + r[2 * i + 1] * r[2 * i + 1];
+    out.glint_residuals_px.push_back(std::hypot(r[2 * i], r[2 * i + 1]));
+  }
   out.rms_residual_px = std::sqrt(sum / (2.0 * glints.size()));
 
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
@@ -307,6 +311,60 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
   }
   if (!out.converged) out.warnings.push_back("the fit stopped before converging: " + summary.message);
   return out;
+}
+
+}  // namespace
+
+CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                     const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
+                     const CorneaFitSettings& s) {
+  check(s);
+  if (!(s.reject_beyond_sd >= 0)) {
+    throw std::invalid_argument("CorneaFitSettings: reject_beyond_sd = " + number(s.reject_beyond_sd) +
+                                ": must be >= 0 (0: no rejection)");
+  }
+  std::vector<int> kept(glints.size());
+  for (std::size_t i = 0; i < glints.size(); ++i) kept[i] = static_cast<int>(i);
+  std::vector<int> rejected;
+  std::vector<double> rejected_residuals;
+  std::vector<std::string> notes;
+  for (;;) {
+    std::vector<GlintObservation> used;
+    for (const int i : kept) used.push_back(glints[i]);
+    CorneaFit fit = fit_once(cameras, lights, used, starts, s);
+    // The worst glint beyond the bound whose frame can spare it.
+    int worst = -1;
+    if (s.reject_beyond_sd > 0 && fit.glint_residuals_px.size() == used.size()) {
+      std::vector<int> per_frame(starts.size(), 0);
+      for (const GlintObservation& g : used) ++per_frame[g.frame];
+      double largest = s.reject_beyond_sd * s.pixel_noise_px;
+      for (std::size_t k = 0; k < used.size(); ++k) {
+        if (per_frame[used[k].frame] >= 4 && fit.glint_residuals_px[k] > largest) {
+          largest = fit.glint_residuals_px[k];
+          worst = static_cast<int>(k);
+        }
+      }
+    }
+    if (worst < 0) {
+      // Residuals in the caller's order, the rejected at their last fit's.
+      std::vector<double> residuals(glints.size(), 0.0);
+      for (std::size_t k = 0; k < kept.size() && k < fit.glint_residuals_px.size(); ++k) {
+        residuals[kept[k]] = fit.glint_residuals_px[k];
+      }
+      for (std::size_t k = 0; k < rejected.size(); ++k) residuals[rejected[k]] = rejected_residuals[k];
+      fit.glint_residuals_px = residuals;
+      fit.rejected = rejected;
+      fit.warnings.insert(fit.warnings.begin(), notes.begin(), notes.end());
+      return fit;
+    }
+    const GlintObservation& g = used[worst];
+    notes.push_back("rejected the glint of light " + std::to_string(g.light) + " in frame " +
+                    std::to_string(g.frame) + ": " + number(fit.glint_residuals_px[worst]) + " px from the fit, over " +
+                    number(s.reject_beyond_sd) + " times the pixel noise");
+    rejected.push_back(kept[worst]);
+    rejected_residuals.push_back(fit.glint_residuals_px[worst]);
+    kept.erase(kept.begin() + worst);
+  }
 }
 
 CorneaFit estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,

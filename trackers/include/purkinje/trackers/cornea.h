@@ -37,6 +37,10 @@ struct CorneaFitSettings {
   // An estimate whose standard deviation exceeds this is reported as
   // weakly determined (a warning); > 0.
   double max_sd_mm = 10;
+  // A glint whose residual exceeds this many pixel_noise_px is rejected
+  // and the fit run again, the worst first, while its frame keeps three
+  // or more (a glint merged with another bright spot); 0: none rejected.
+  double reject_beyond_sd = 6;
 };
 
 struct CorneaFit {
@@ -49,8 +53,12 @@ struct CorneaFit {
   // do not determine them.
   std::vector<double> covariance_mm2;
   double rms_residual_px = 0;  // of the glints' pixels at the estimate
+  // Each glint's distance from its prediction, in input order (rejected
+  // ones included).
+  std::vector<double> glint_residuals_px;
   double condition = 0;        // of J^T J (0 when not computed)
   int glints_used = 0;
+  std::vector<int> rejected;  // indices into the glints given, in the order rejected
   bool converged = false;
   std::vector<std::string> warnings;  // why the estimate should not be trusted, if it should not
 

@@ -19,12 +19,14 @@
 #include "purkinje/models/truth.h"
 #include "purkinje/trackers/cornea.h"
 #include "purkinje/trackers/scoring.h"
+#include "statistics_draws.h"
 
 namespace purkinje::trackers {
 namespace {
 
-constexpr int kDraws = 1000;
 constexpr double kNoisePx = 0.1;
+
+
 
 Scene bundled(const std::string& name) {
   return load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
@@ -65,23 +67,24 @@ void expect_scatter_matches(const Problem& p) {
   const Eigen::MatrixXd bound = covariance_of(at_truth);
   const int n = static_cast<int>(bound.rows());
 
+  const int draws = statistics_draws();
   std::mt19937 random(20261124);
   std::normal_distribution<double> noise(0, kNoisePx);
   std::vector<Eigen::VectorXd> errors;
   Eigen::MatrixXd reported = Eigen::MatrixXd::Zero(n, n);
-  for (int draw = 0; draw < kDraws; ++draw) {
+  for (int draw = 0; draw < draws; ++draw) {
     std::vector<GlintObservation> noisy = p.exact;
     for (GlintObservation& g : noisy) g.pixel = {g.pixel.u + noise(random), g.pixel.v + noise(random)};
     const CorneaFit fit = fit_cornea(p.cameras, p.lights, noisy, p.starts, p.settings);
     ASSERT_TRUE(fit.converged) << draw;
     ASSERT_TRUE(fit.has_covariance()) << draw;
     errors.push_back(unknowns(fit) - p.truth);
-    reported += covariance_of(fit) / kDraws;
+    reported += covariance_of(fit) / draws;
   }
   Eigen::VectorXd mean = Eigen::VectorXd::Zero(n);
-  for (const Eigen::VectorXd& e : errors) mean += e / kDraws;
+  for (const Eigen::VectorXd& e : errors) mean += e / draws;
   Eigen::MatrixXd scatter = Eigen::MatrixXd::Zero(n, n);
-  for (const Eigen::VectorXd& e : errors) scatter += (e - mean) * (e - mean).transpose() / (kDraws - 1);
+  for (const Eigen::VectorXd& e : errors) scatter += (e - mean) * (e - mean).transpose() / (draws - 1);
 
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> axes(bound);
   for (int k = 0; k < n; ++k) {

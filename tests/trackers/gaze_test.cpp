@@ -20,6 +20,7 @@
 
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/truth.h"
+#include "statistics_draws.h"
 
 namespace purkinje::trackers {
 namespace {
@@ -253,9 +254,9 @@ TEST(ModelGaze, ReportedUncertaintyMatchesTheScatterUnderFeatureNoise) {
   ASSERT_TRUE(at_truth.valid);
   std::mt19937 random(5);
   std::normal_distribution<double> glint(0, noise.glint_px), pupil(0, noise.pupil_px);
-  constexpr int kDraws = 1000;
+  const int draws = statistics_draws();
   double sum[2] = {0, 0}, sum2[2] = {0, 0}, reported[2] = {0, 0};
-  for (int draw = 0; draw < kDraws; ++draw) {
+  for (int draw = 0; draw < draws; ++draw) {
     GazeFeatures f = exact;
     for (Glint& g : f.glints) g.centre = {g.centre.u + glint(random), g.centre.v + glint(random)};
     f.pupil_center = {f.pupil_center.u + pupil(random), f.pupil_center.v + pupil(random)};
@@ -266,12 +267,12 @@ TEST(ModelGaze, ReportedUncertaintyMatchesTheScatterUnderFeatureNoise) {
       sum[k] += xy[k];
       sum2[k] += xy[k] * xy[k];
       ASSERT_TRUE(g.on_screen_covariance_mm2);
-      reported[k] += (*g.on_screen_covariance_mm2)[3 * k] / kDraws;
+      reported[k] += (*g.on_screen_covariance_mm2)[3 * k] / draws;
     }
   }
   for (int k = 0; k < 2; ++k) {
-    const double mean = sum[k] / kDraws;
-    const double sd_seen = std::sqrt((sum2[k] - kDraws * mean * mean) / (kDraws - 1));
+    const double mean = sum[k] / draws;
+    const double sd_seen = std::sqrt((sum2[k] - draws * mean * mean) / (draws - 1));
     EXPECT_NEAR(sd_seen / std::sqrt(reported[k]), 1, 0.2) << k;
     EXPECT_NEAR(sd_seen / std::sqrt((*at_truth.on_screen_covariance_mm2)[3 * k]), 1, 0.2) << k;
     char text[64];

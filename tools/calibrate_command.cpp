@@ -255,6 +255,15 @@ int run_calibrate(const CalibrateRequest& request) {
     if (request.fit_radius) r.add("cornea_radius_sd", model.cornea_radius_sd_mm, "mm");
     r.add("cornea_radius_true", rig.eyes.front().model().anterior_cornea.radius_mm, "mm");
     r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
+    if (model.rotation_center) {
+      r.add("rotation_center", {model.rotation_center->x, model.rotation_center->y, model.rotation_center->z}, "mm");
+      r.add("rotation_center_sd",
+            {model.rotation_center_sd_mm[0], model.rotation_center_sd_mm[1], model.rotation_center_sd_mm[2]}, "mm");
+      r.add("rotation_center_error", distance(*model.rotation_center, home), "mm");
+      r.add("rotation_distance", model.rotation_distance_mm, "mm");
+    } else {
+      r.add("rotation_center", std::string("not determined: the optical axes are too alike"));
+    }
     r.add("glint_noise", noise.glint_px, "px");
     r.add("glint_noise_from", request.glint_noise_px ? std::string("given") : std::string("measured"));
     r.add("pupil_noise", noise.pupil_px, "px");

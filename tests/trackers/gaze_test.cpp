@@ -157,7 +157,7 @@ void record(const std::string& name, const Errors& e) {
   ::testing::Test::RecordProperty(name + "_max_deg", text);
 }
 
-GazeEyeModel calibrated(const GazeRig& s, PupilFeature feature, bool fit_pupil_depth = false) {
+ModelGazeCalibration calibration(const GazeRig& s, PupilFeature feature, bool fit_pupil_depth = false) {
   std::vector<GazeFeatures> frames;
   std::vector<Point3> targets;
   for (const ScreenPoint& target : s.screen.grid(3, 3)) {
@@ -173,7 +173,11 @@ GazeEyeModel calibrated(const GazeRig& s, PupilFeature feature, bool fit_pupil_d
   const ModelGazeCalibration c =
       calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, frames, targets, start, s.home, settings);
   EXPECT_TRUE(c.converged);
-  return c.model;
+  return c;
+}
+
+GazeEyeModel calibrated(const GazeRig& s, PupilFeature feature, bool fit_pupil_depth = false) {
+  return calibration(s, feature, fit_pupil_depth).model;
 }
 
 TEST(ModelGaze, CalibrationFindsKappaAndThePupilsDepthFromNineTargets) {
@@ -185,6 +189,13 @@ TEST(ModelGaze, CalibrationFindsKappaAndThePupilsDepthFromNineTargets) {
   EXPECT_NEAR(with_depth.kappa_horizontal_rad, 5 * kDeg, 1e-8);
   EXPECT_NEAR(with_depth.kappa_vertical_rad, 1.5 * kDeg, 1e-8);
   EXPECT_NEAR(with_depth.pupil_depth_mm, 4.2, 1e-6);
+  // The centre of rotation: where the eye turned about, 13.5 - 7.8 mm
+  // behind the cornea's centre.
+  const ModelGazeCalibration c = calibration(s, PupilFeature::refracted_center);
+  ASSERT_TRUE(c.rotation_center);
+  EXPECT_LT(distance(*c.rotation_center, s.home), 1e-6);
+  EXPECT_NEAR(c.rotation_distance_mm, 13.5 - 7.8, 1e-6);
+  EXPECT_LT(c.rotation_center_sd_mm[2], 1e-6);
 }
 
 // Both exact pupils: the image of its centre, and its outline (the

@@ -135,6 +135,14 @@ struct ModelGazeCalibration {
   double cornea_radius_sd_mm = 0;  // when fitted
   double rms_error_rad = 0;        // angle between the visual axes and the targets, after the fit
   std::vector<Point3> cornea_centers;  // per frame
+  // The eye's centre of rotation, for a head held still: each frame's
+  // cornea centre lies a fixed distance from it along its optical axis,
+  // c = r + d o (linear least squares in r and d), with the s.d. of r's
+  // coordinates from the residuals' scatter. Absent when the axes are too
+  // alike to place it.
+  std::optional<Point3> rotation_center;
+  double rotation_distance_mm = 0;  // d
+  std::array<double, 3> rotation_center_sd_mm{};
   bool converged = false;
   std::vector<std::string> warnings;
 };

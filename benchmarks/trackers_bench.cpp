@@ -123,53 +123,50 @@ BENCHMARK(BM_CorneaCenterRemoteNoisy)->Unit(benchmark::kMicrosecond);
 // ms): the bundled remote rig and screen, a one-surface spherical eye with
 // kappa fixating a 3 x 3 grid, exact features (the pupil's outline, 36
 // points) with 0.1 px of noise on the glints and 0.05 px on the pupil; the
-// model-based method (cornea over the nine frames, then kappa) and the
-// polynomial.
-std::vector<GazeFeatures> nine_frames(const Scene& rig, EyeModel& eye, std::vector<Point3>& targets,
-                                      std::vector<ScreenPoint>& on_screen) {
-  eye = keratometric_eye();
+// model-based method (cornea over the nine frames, kappa, the centre of
+// rotation) and the polynomial.
+struct NineFrames {
+  Scene rig = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote.json");
+  std::vector<GazeFeatures> frames;
+  std::vector<Point3> targets;
+  std::vector<ScreenPoint> on_screen = rig.screen->grid(3, 3);
+};
+
+NineFrames nine_frames() {
+  NineFrames n;
+  EyeModel eye = keratometric_eye();
   eye.kappa_horizontal_rad = 0.087;
   eye.kappa_vertical_rad = 0.026;
   std::mt19937 random(3);
   std::normal_distribution<double> glint(0, 0.1), pupil(0, 0.05);
-  std::vector<GazeFeatures> frames;
-  on_screen = rig.screen->grid(3, 3);
-  for (const ScreenPoint& t : on_screen) {
-    Scene s = rig;
-    s.eyes = {Eye::fixating(eye, rig.eyes[0].rotation_center(), rig.screen->at(t))};
+  for (const ScreenPoint& t : n.on_screen) {
+    Scene s = n.rig;
+    s.eyes = {Eye::fixating(eye, n.rig.eyes[0].rotation_center(), n.rig.screen->at(t))};
     GazeFeatures f = *exact_gaze_features(compute_truth(s).views.front());
     for (Glint& g : f.glints) g.centre = {g.centre.u + glint(random), g.centre.v + glint(random)};
     // The pupil moves as a whole: its centre and its outline.
     const double du = pupil(random), dv = pupil(random);
     f.pupil_center = {f.pupil_center.u + du, f.pupil_center.v + dv};
     for (Pixel& p : f.pupil_outline) p = {p.u + du, p.v + dv};
-    frames.push_back(f);
-    targets.push_back(rig.screen->at(t));
+    n.frames.push_back(f);
+    n.targets.push_back(n.rig.screen->at(t));
   }
-  return frames;
+  return n;
 }
 
 void BM_GazeCalibrationModelBased(benchmark::State& state) {
-  const Scene rig = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote.json");
-  EyeModel eye;
-  std::vector<Point3> targets;
-  std::vector<ScreenPoint> on_screen;
-  const std::vector<GazeFeatures> frames = nine_frames(rig, eye, targets, on_screen);
+  const NineFrames n = nine_frames();
   const GazeEyeModel nominal;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(
-        calibrate_model_gaze(rig.cameras[0], rig.illuminators, frames, targets, nominal, rig.eyes[0].rotation_center()));
+    benchmark::DoNotOptimize(calibrate_model_gaze(n.rig.cameras[0], n.rig.illuminators, n.frames, n.targets, nominal,
+                                                  n.rig.eyes[0].rotation_center()));
   }
 }
 BENCHMARK(BM_GazeCalibrationModelBased)->Unit(benchmark::kMillisecond);
 
 void BM_GazeCalibrationPolynomial(benchmark::State& state) {
-  const Scene rig = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote.json");
-  EyeModel eye;
-  std::vector<Point3> targets;
-  std::vector<ScreenPoint> on_screen;
-  const std::vector<GazeFeatures> frames = nine_frames(rig, eye, targets, on_screen);
-  for (auto _ : state) benchmark::DoNotOptimize(PolynomialGaze::calibrate(frames, on_screen));
+  const NineFrames n = nine_frames();
+  for (auto _ : state) benchmark::DoNotOptimize(PolynomialGaze::calibrate(n.frames, n.on_screen));
 }
 BENCHMARK(BM_GazeCalibrationPolynomial)->Unit(benchmark::kMicrosecond);
 

@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "environment_count.h"
 #include "purkinje/models/eye_variation.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
@@ -52,15 +53,7 @@ Scene bundled(const std::string& name) {
 // The full 200 unless PURKINJE_REALISM_RENDERS says fewer: .ci/run lowers it
 // for the sanitizer and coverage builds, which check the code, not the bar.
 int renders_per_scene() {
-  const char* text = std::getenv("PURKINJE_REALISM_RENDERS");
-  if (text == nullptr || *text == '\0') return kBarRenders;
-  char* end = nullptr;
-  const long n = std::strtol(text, &end, 10);
-  if (*end != '\0' || n < 1 || n > kBarRenders) {
-    throw std::invalid_argument(std::string("PURKINJE_REALISM_RENDERS = ") + text +
-                                ": must be an integer in [1, 200]");
-  }
-  return static_cast<int>(n);
+  return testing::count_from_environment("PURKINJE_REALISM_RENDERS", kBarRenders, 1);
 }
 
 // ------------------------------------------------------------ random renders

@@ -37,7 +37,7 @@ constexpr double kDegree = std::numbers::pi / 180;
 
 // One rendered frame: the eye fixating a target from a head position.
 struct Frame {
-  std::string position;  // "home" or the head move
+  int position = 0;  // 0: the scene's eye position; then the head moves in order
   ScreenPoint target;
   Point3 cornea_center;                 // truth
   std::optional<trackers::GazeFeatures> found;  // from the image; nullopt: a glint or the pupil missed
@@ -56,7 +56,7 @@ std::string format(double value, int digits = 4) {
 
 // Renders the eye fixating `target` from rotation centre `center` and
 // reads the image with the detectors.
-Frame render_frame(const Scene& rig, const Point3& center, const std::string& position, const ScreenPoint& target,
+Frame render_frame(const Scene& rig, const Point3& center, int position, const ScreenPoint& target,
                    const std::vector<std::optional<Pixel>>& layout, std::uint64_t seed) {
   Frame f;
   f.position = position;
@@ -147,6 +147,9 @@ int run_calibrate(const CalibrateRequest& request) {
   const Camera& camera = rig.cameras.front();
   const Screen& screen = *rig.screen;
   const Point3 home = rig.eyes.front().rotation_center();
+  // Where the tracker expects the cornea (its nominal eye): every fit's
+  // start, never the frame's truth.
+  const Point3 nominal_cornea = rig.eyes.front().cornea_center();
   // The tracker knows its rig and a nominal eye: the classic one-surface
   // sphere, and where the rig's lights put glints on the scene's eye.
   const trackers::GazeEyeModel nominal;
@@ -162,11 +165,11 @@ int run_calibrate(const CalibrateRequest& request) {
   std::uint64_t seed = request.seed;
   try {
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
-      calibration.push_back(render_frame(rig, home, "home", t, layout, seed++));
+      calibration.push_back(render_frame(rig, home, 0, t, layout, seed++));
     }
-    for (const auto& [name, center] : positions) {
+    for (std::size_t p = 0; p < positions.size(); ++p) {
       for (const ScreenPoint& t : screen.grid(request.grid, request.grid)) {
-        tests.push_back(render_frame(rig, center, name, t, layout, seed++));
+        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, layout, seed++));
       }
     }
   } catch (const std::exception& error) {
@@ -195,7 +198,8 @@ int run_calibrate(const CalibrateRequest& request) {
   // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
   // so that a merged glint does not inflate it.
   const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
-  const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given) {
+  const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given,
+                            double fallback) {
     if (given) return *given;
     std::vector<double> all;
     for (const Frame& f : calibration) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
@@ -206,14 +210,15 @@ int run_calibrate(const CalibrateRequest& request) {
       for (const double e : all) {
         if (std::abs(e) <= clip * sd) sum += e * e, ++count;
       }
-      const double next = count > 0 ? std::sqrt(sum / count) : trackers::FeatureNoise{}.glint_px;
+      const double next = count > 0 ? std::sqrt(sum / count) : fallback;
       if (next == sd) break;
       sd = next;
     }
     return std::max(1e-3, sd);
   };
-  const trackers::FeatureNoise noise{measured(&Frame::glint_errors_px, request.glint_noise_px),
-                                     measured(&Frame::pupil_errors_px, request.pupil_noise_px)};
+  const trackers::FeatureNoise noise{
+      measured(&Frame::glint_errors_px, request.glint_noise_px, trackers::FeatureNoise{}.glint_px),
+      measured(&Frame::pupil_errors_px, request.pupil_noise_px, trackers::FeatureNoise{}.pupil_px)};
   trackers::ModelGazeCalibrationSettings settings;
   settings.fit_cornea_radius = request.fit_radius;
   settings.fit_pupil_depth = request.fit_pupil_depth;
@@ -221,13 +226,14 @@ int run_calibrate(const CalibrateRequest& request) {
   trackers::ModelGazeCalibration model;
   std::optional<trackers::PolynomialGaze> polynomial;
   try {
-    model = trackers::calibrate_model_gaze(camera, rig.illuminators, features, targets, nominal, home, settings);
+    model = trackers::calibrate_model_gaze(camera, rig.illuminators, features, targets, nominal, nominal_cornea,
+                                           settings);
     polynomial = trackers::PolynomialGaze::calibrate(features, screen_targets);
   } catch (const std::exception& error) {
     std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
     return kBadInput;
   }
-  if (!model.converged) {
+  if (!model.converged || model.covariance.empty()) {
     std::cerr << "purkinje calibrate: error: the model-based calibration failed:";
     for (const std::string& w : model.warnings) std::cerr << "\n  " << w;
     std::cerr << "\n";
@@ -286,104 +292,119 @@ int run_calibrate(const CalibrateRequest& request) {
          "cornea_depth_sd_mm,model_x_mm,model_y_mm,model_sd_x_mm,model_sd_y_mm,model_error_deg,polynomial_x_mm,"
          "polynomial_y_mm,polynomial_error_deg\n";
   std::vector<trackers::GazeMapPanel> panels;
-  for (const auto& [name, center] : positions) {
-    Tally model_tally, polynomial_tally;
-    std::vector<double> lateral, depth;
-    int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
-    trackers::GazeMapPanel panel{name, {}, {{}, {}}};
-    for (const Frame& f : tests) {
-      if (f.position != name) continue;
-      panel.targets.push_back(f.target);
-      const auto error_deg = [&](const ScreenPoint& p) {
-        return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
-      };
-      csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
-          << (f.found ? 1 : 0);
-      std::optional<ScreenPoint> by_model, by_polynomial;
-      if (f.found) {
-        const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
-                                                                    screen, f.cornea_center, noise);
-        // The cornea's error along the camera's line of sight (depth) and
-        // across it, on two fixed axes: the camera's x and y made
-        // perpendicular to the line of sight. Each is checked against its
-        // own s.d., as the screen's x and y are.
-        const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
-        const Vector3 camera_x = camera.world_from_camera() * Vector3{1, 0, 0};
-        const Vector3 across_x = (camera_x - dot(camera_x, sight) * sight) / (camera_x - dot(camera_x, sight) * sight).norm();
-        const Vector3 across_y = cross(sight, across_x);
-        const Vector3 e = g.cornea_center - f.cornea_center;
-        const auto variance_along = [&](const Vector3& d) {
-          double v = 0;
-          for (int a = 0; a < 3; ++a) {
-            for (int b = 0; b < 3; ++b) v += d[a] * g.cornea_covariance_mm2[3 * a + b] * d[b];
-          }
-          return v;
+  try {
+    for (std::size_t p = 0; p < positions.size(); ++p) {
+      const std::string& name = positions[p].first;
+      Tally model_tally, polynomial_tally;
+      std::vector<double> lateral, depth;
+      int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
+      trackers::GazeMapPanel panel{name, {}, {{}, {}}};
+      for (const Frame& f : tests) {
+        if (f.position != static_cast<int>(p)) continue;
+        panel.targets.push_back(f.target);
+        const auto error_deg = [&](const ScreenPoint& p) {
+          return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
         };
-        const double along = dot(e, sight);
-        const double across = (e - along * sight).norm();
-        const double depth_var = variance_along(sight);
-        csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var);
-        if (g.valid) {
-          lateral.push_back(across);
-          depth.push_back(along);
-          ++cornea_with_sd;
-          depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
-          lateral_within += std::abs(dot(e, across_x)) <= 3 * std::sqrt(variance_along(across_x)) &&
-                                    std::abs(dot(e, across_y)) <= 3 * std::sqrt(variance_along(across_y))
-                                ? 1
-                                : 0;
-        }
-        if (g.valid && g.on_screen) {
-          by_model = g.on_screen;
-          const std::array<double, 4> c = g.on_screen_covariance_mm2.value_or(std::array<double, 4>{});
-          const double sx = std::sqrt(c[0]), sy = std::sqrt(c[3]);
-          model_tally.errors_deg.push_back(error_deg(*by_model));
-          ++model_tally.with_sd;
-          model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
-          model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
-          csv << ',' << by_model->x_mm << ',' << by_model->y_mm << ',' << sx << ',' << sy << ','
-              << model_tally.errors_deg.back();
+        csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
+            << (f.found ? 1 : 0);
+        std::optional<ScreenPoint> by_model, by_polynomial;
+        if (f.found) {
+          const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
+                                                                      screen, nominal_cornea, noise);
+          // The cornea's error along the camera's line of sight (depth) and
+          // across it, on two fixed axes: the camera's x and y made
+          // perpendicular to the line of sight. Each is checked against its
+          // own s.d., as the screen's x and y are.
+          const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
+          const Vector3 camera_x = camera.world_from_camera() * Vector3{1, 0, 0};
+          const Vector3 across_x = (camera_x - dot(camera_x, sight) * sight) / (camera_x - dot(camera_x, sight) * sight).norm();
+          const Vector3 across_y = cross(sight, across_x);
+          const Vector3 e = g.cornea_center - f.cornea_center;
+          const auto variance_along = [&](const Vector3& d) {
+            double v = 0;
+            for (int a = 0; a < 3; ++a) {
+              for (int b = 0; b < 3; ++b) v += d[a] * g.cornea_covariance_mm2[3 * a + b] * d[b];
+            }
+            return v;
+          };
+          const double along = dot(e, sight);
+          const double across = (e - along * sight).norm();
+          const double depth_var = variance_along(sight);
+          if (g.cornea_determined) {
+            csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var);
+          } else {
+            csv << ",,,";
+          }
+          if (g.cornea_determined) {
+            lateral.push_back(across);
+            depth.push_back(along);
+            ++cornea_with_sd;
+            depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
+            lateral_within += std::abs(dot(e, across_x)) <= 3 * std::sqrt(variance_along(across_x)) &&
+                                      std::abs(dot(e, across_y)) <= 3 * std::sqrt(variance_along(across_y))
+                                  ? 1
+                                  : 0;
+          }
+          if (g.valid && g.on_screen) {
+            by_model = g.on_screen;
+            model_tally.errors_deg.push_back(error_deg(*by_model));
+            csv << ',' << by_model->x_mm << ',' << by_model->y_mm;
+            if (g.on_screen_covariance_mm2) {
+              const double sx = std::sqrt((*g.on_screen_covariance_mm2)[0]);
+              const double sy = std::sqrt((*g.on_screen_covariance_mm2)[3]);
+              ++model_tally.with_sd;
+              model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
+              model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
+              csv << ',' << sx << ',' << sy;
+            } else {
+              csv << ",,";
+            }
+            csv << ',' << model_tally.errors_deg.back();
+          } else {
+            ++model_tally.missing;
+            csv << ",,,,,";
+          }
+          by_polynomial = polynomial->estimate(*f.found);
         } else {
           ++model_tally.missing;
-          csv << ",,,,,";
+          csv << ",,,,,,,,";
         }
-        by_polynomial = polynomial->estimate(*f.found);
-      } else {
-        ++model_tally.missing;
-        csv << ",,,,,,,,";
+        if (by_polynomial) {
+          polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));
+          csv << ',' << by_polynomial->x_mm << ',' << by_polynomial->y_mm << ',' << polynomial_tally.errors_deg.back();
+        } else {
+          ++polynomial_tally.missing;
+          csv << ",,,";
+        }
+        csv << '\n';
+        panel.estimates[0].push_back(by_model);
+        panel.estimates[1].push_back(by_polynomial);
       }
-      if (by_polynomial) {
-        polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));
-        csv << ',' << by_polynomial->x_mm << ',' << by_polynomial->y_mm << ',' << polynomial_tally.errors_deg.back();
-      } else {
-        ++polynomial_tally.missing;
-        csv << ",,,";
+      trackers::SimulationRun m{name, "model-based", {}, std::nullopt};
+      add_errors(m.results, "gaze_", model_tally);
+      if (!depth.empty()) {
+        double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
+        for (std::size_t i = 0; i < depth.size(); ++i) {
+          sum_lateral += lateral[i];
+          sum_depth += depth[i];
+          sum_depth2 += depth[i] * depth[i];
+        }
+        const double n = static_cast<double>(depth.size());
+        m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
+        m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
+        m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
+        m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
+        m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
       }
-      csv << '\n';
-      panel.estimates[0].push_back(by_model);
-      panel.estimates[1].push_back(by_polynomial);
+      runs.push_back(std::move(m));
+      trackers::SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};
+      add_errors(by_polynomial_run.results, "gaze_", polynomial_tally);
+      runs.push_back(std::move(by_polynomial_run));
+      panels.push_back(std::move(panel));
     }
-    trackers::SimulationRun m{name, "model-based", {}, std::nullopt};
-    add_errors(m.results, "gaze_", model_tally);
-    if (!depth.empty()) {
-      double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
-      for (std::size_t i = 0; i < depth.size(); ++i) {
-        sum_lateral += lateral[i];
-        sum_depth += depth[i];
-        sum_depth2 += depth[i] * depth[i];
-      }
-      const double n = static_cast<double>(depth.size());
-      m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
-      m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
-      m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
-      m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
-      m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
-    }
-    runs.push_back(std::move(m));
-    trackers::SimulationRun p{name, "polynomial", {}, std::nullopt};
-    add_errors(p.results, "gaze_", polynomial_tally);
-    runs.push_back(std::move(p));
-    panels.push_back(std::move(panel));
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje calibrate: error: while scoring: " << error.what() << "\n";
+    return kBadInput;
   }
 
   const fs::path dir(request.output_dir);

@@ -334,7 +334,8 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
     CorneaFit fit = fit_once(cameras, lights, used, starts, s);
     // The worst glint beyond the bound whose frame can spare it.
     int worst = -1;
-    if (s.reject_beyond_sd > 0 && fit.glint_residuals_px.size() == used.size()) {
+    if (s.reject_beyond_sd > 0 && fit.converged && fit.has_covariance() &&
+        fit.glint_residuals_px.size() == used.size()) {
       std::vector<int> per_frame(starts.size(), 0);
       for (const GlintObservation& g : used) ++per_frame[g.frame];
       double largest = s.reject_beyond_sd * s.pixel_noise_px;
@@ -359,7 +360,7 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
     }
     const GlintObservation& g = used[worst];
     notes.push_back("rejected the glint of light " + std::to_string(g.light) + " in frame " +
-                    std::to_string(g.frame) + ": " + number(fit.glint_residuals_px[worst]) + " px from the fit, over " +
+                    std::to_string(g.frame) + " of camera " + std::to_string(g.camera) + ": " + number(fit.glint_residuals_px[worst]) + " px from the fit, over " +
                     number(s.reject_beyond_sd) + " times the pixel noise");
     rejected.push_back(kept[worst]);
     rejected_residuals.push_back(fit.glint_residuals_px[worst]);

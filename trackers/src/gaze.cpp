@@ -99,8 +99,10 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
                                                            const std::vector<Pixel>& outline,
                                                            const GazeEyeModel& model,
                                                            const std::optional<UnitVector3>& start) {
+  // Entry points relative to the cornea's centre: the fixed point's
+  // changes near convergence are far below a world coordinate's rounding.
   struct Ray {
-    Point3 entry;
+    Vector3 entry;
     Vector3 inside;
   };
   std::vector<Ray> rays;
@@ -111,45 +113,49 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
     const UnitVector3 ray = camera.back_project(p);
     const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, model.cornea_radius_mm);
     if (!to_cornea) continue;
-    const Point3 entry = o + *to_cornea * ray;
-    const Vector3 normal = (entry - cornea_center) / model.cornea_radius_mm;
+    const Vector3 entry = (o + *to_cornea * ray) - cornea_center;
+    const Vector3 normal = entry / model.cornea_radius_mm;
     const double cos_in = -dot(normal, ray);
     const double sin2_out = eta * eta * (1 - cos_in * cos_in);
     rays.push_back({entry, eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal});
-    middle += entry - cornea_center;
+    middle += entry;
   }
   if (rays.size() < 5) return std::nullopt;
   std::optional<UnitVector3> axis = UnitVector3::try_normalize(middle);
   if (start) axis = *start;
   if (!axis) return std::nullopt;
   const double depth = model.pupil_depth_mm;
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(rays.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(rays.size()));
+  double change = INFINITY;
   for (int iteration = 0; iteration < 200; ++iteration) {
     // The rays meet the plane across the axis at the pupil's depth; a
     // circle fitted there (Kasa: linear in the centre and radius) gives
     // the centre whatever the points' spacing.
-    const Point3 on_axis = cornea_center + depth * *axis;
+    const Vector3 on_axis = depth * axis->vector();
     const Vector3 reference = std::abs(axis->x()) < 0.9 ? Vector3{1, 0, 0} : Vector3{0, 1, 0};
     const Vector3 e1 = cross(*axis, reference) / cross(*axis, reference).norm();
     const Vector3 e2 = cross(*axis, e1);
-    Eigen::MatrixXd a(static_cast<Eigen::Index>(rays.size()), 3);
-    Eigen::VectorXd b(static_cast<Eigen::Index>(rays.size()));
     for (std::size_t i = 0; i < rays.size(); ++i) {
       const double along = dot(rays[i].inside, *axis);
       if (!(std::abs(along) > 1e-9)) return std::nullopt;
-      const double s = (depth - dot(rays[i].entry - cornea_center, *axis)) / along;
-      const Vector3 x = (rays[i].entry + s * rays[i].inside) - on_axis;
+      const double s = (depth - dot(rays[i].entry, *axis)) / along;
+      const Vector3 x = rays[i].entry + s * rays[i].inside - on_axis;
       const double u = dot(x, e1), v = dot(x, e2);
       a.row(static_cast<Eigen::Index>(i)) << 2 * u, 2 * v, 1;
       b[static_cast<Eigen::Index>(i)] = u * u + v * v;
     }
     const Eigen::Vector3d fit = a.colPivHouseholderQr().solve(b);
     if (!fit.allFinite()) return std::nullopt;
-    const Point3 center = on_axis + fit[0] * e1 + fit[1] * e2;
-    const std::optional<UnitVector3> next = UnitVector3::try_normalize(center - cornea_center);
+    const std::optional<UnitVector3> next = UnitVector3::try_normalize(on_axis + fit[0] * e1 + fit[1] * e2);
     if (!next) return std::nullopt;
-    const double change = angle_between(*next, *axis);
+    const double step = angle_between(*next, *axis);
     axis = next;
-    if (change < 1e-13) return OpticalAxis{cornea_center + depth * *axis, *axis};
+    // Done at 1e-12 rad, or once the steps stop shrinking (rounding).
+    if (step < 1e-12 || (step >= change && step < 1e-10)) {
+      return OpticalAxis{cornea_center + depth * axis->vector(), *axis};
+    }
+    change = step;
   }
   return std::nullopt;
 }
@@ -168,18 +174,22 @@ std::optional<OpticalAxis> pupil_axis(const Camera& camera, const Point3& cornea
 
 // The estimate without its uncertainty.
 ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& lights, const GazeFeatures& features,
-                     const GazeEyeModel& model, const Screen& screen, const Point3& start, double glint_noise_px) {
+                     const GazeEyeModel& model, const Screen& screen, const Point3& start, double glint_noise_px,
+                     double reject_beyond_sd, std::vector<int>* rejected = nullptr) {
   ModelGaze out;
   CorneaFitSettings settings;
   settings.cornea_radius_mm = model.cornea_radius_mm;
   settings.pixel_noise_px = glint_noise_px;
+  settings.reject_beyond_sd = reject_beyond_sd;
   const CorneaFit cornea = estimate_cornea_center(camera, lights, features.glints, start, settings);
   out.warnings = cornea.warnings;
   out.cornea_center = cornea.centers.front();
+  if (rejected != nullptr) *rejected = cornea.rejected;
   if (!cornea.converged || !cornea.has_covariance()) {
     out.warnings.push_back("no gaze: the cornea's centre is not determined by the glints");
     return out;
   }
+  out.cornea_determined = true;
   out.cornea_covariance_mm2 = cornea.center_covariance(0);
   const std::optional<OpticalAxis> axis = pupil_axis(camera, out.cornea_center, features, model);
   if (!axis) {
@@ -200,15 +210,26 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
                               const Point3& start, const std::optional<FeatureNoise>& given_noise) {
   const FeatureNoise noise = given_noise.value_or(FeatureNoise{});
-  ModelGaze out = model_gaze(camera, lights, features, model, screen, start, noise.glint_px);
+  std::vector<int> rejected;
+  ModelGaze out = model_gaze(camera, lights, features, model, screen, start, noise.glint_px,
+                             CorneaFitSettings{}.reject_beyond_sd, &rejected);
   if (!given_noise || !out.valid || !out.on_screen) return out;
   // Each feature coordinate moved both ways by a small step; the screen
-  // point's changes give the Jacobian, and its covariance follows.
+  // point's changes give the Jacobian, and its covariance follows. The
+  // glints the estimate rejected stay out, and no more are rejected: a
+  // glint near the bound must not flip between the two sides.
+  GazeFeatures kept = features;
+  int told = 0;
+  for (Glint& g : kept.glints) {
+    if (g.illuminator < 0) continue;
+    if (std::find(rejected.begin(), rejected.end(), told++) != rejected.end()) g.illuminator = -1;
+  }
   constexpr double step_px = 1e-3;
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
   const auto add = [&](GazeFeatures moved_plus, GazeFeatures moved_minus, double sd_px) {
-    const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise.glint_px);
-    const ModelGaze minus = model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise.glint_px);
+    const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise.glint_px, 0);
+    const ModelGaze minus =
+        model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise.glint_px, 0);
     if (!plus.on_screen || !minus.on_screen) return false;
     const Eigen::Vector2d column((plus.on_screen->x_mm - minus.on_screen->x_mm) / (2 * step_px),
                                  (plus.on_screen->y_mm - minus.on_screen->y_mm) / (2 * step_px));
@@ -216,10 +237,10 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
     return true;
   };
   bool ok = true;
-  for (std::size_t i = 0; i < features.glints.size() && ok; ++i) {
-    if (features.glints[i].illuminator < 0) continue;
+  for (std::size_t i = 0; i < kept.glints.size() && ok; ++i) {
+    if (kept.glints[i].illuminator < 0) continue;
     for (int axis = 0; axis < 2 && ok; ++axis) {
-      GazeFeatures plus = features, minus = features;
+      GazeFeatures plus = kept, minus = kept;
       (axis == 0 ? plus.glints[i].centre.u : plus.glints[i].centre.v) += step_px;
       (axis == 0 ? minus.glints[i].centre.u : minus.glints[i].centre.v) -= step_px;
       ok = add(plus, minus, noise.glint_px);
@@ -227,7 +248,7 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
   }
   // The pupil moved as a whole: its centre and its outline together.
   for (int axis = 0; axis < 2 && ok; ++axis) {
-    GazeFeatures plus = features, minus = features;
+    GazeFeatures plus = kept, minus = kept;
     const auto shift = [&](GazeFeatures& f, double by) {
       (axis == 0 ? f.pupil_center.u : f.pupil_center.v) += by;
       for (Pixel& p : f.pupil_outline) (axis == 0 ? p.u : p.v) += by;
@@ -356,7 +377,11 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
   } else if (m > n) {
     double rss = 0;
     for (const double e : r) rss += e * e;
-    const Eigen::MatrixXd covariance = rss / (m - n) * normal.inverse();
+    // From the eigenvalues (all > 0 here), so that no diagonal comes out
+    // negative by rounding.
+    const Eigen::MatrixXd covariance = rss / (m - n) * eigen.eigenvectors() *
+                                       eigen.eigenvalues().cwiseInverse().asDiagonal() *
+                                       eigen.eigenvectors().transpose();
     out.covariance.assign(covariance.data(), covariance.data() + n * n);
   }
   if (!out.converged) out.warnings.push_back("the calibration stopped before converging: " + summary.message);
@@ -382,7 +407,9 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
   if (axes && rows > 4 && singular[3] > 1e-6 * singular[0]) {
     const Eigen::VectorXd x = svd.solve(c);
     const double rss = (a * x - c).squaredNorm();
-    const Eigen::MatrixXd covariance = rss / (rows - 4) * (a.transpose() * a).inverse();
+    // (A^T A)^-1 = V S^-2 V^T: no diagonal can come out negative.
+    const Eigen::MatrixXd covariance = rss / (rows - 4) * svd.matrixV() *
+                                       singular.cwiseAbs2().cwiseInverse().asDiagonal() * svd.matrixV().transpose();
     out.rotation_center = Point3{x[0], x[1], x[2]};
     out.rotation_distance_mm = x[3];
     for (int k = 0; k < 3; ++k) out.rotation_center_sd_mm[k] = std::sqrt(covariance(k, k));

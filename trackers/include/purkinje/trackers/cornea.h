@@ -53,8 +53,8 @@ struct CorneaFit {
   // do not determine them.
   std::vector<double> covariance_mm2;
   double rms_residual_px = 0;  // of the glints' pixels at the estimate
-  // Each glint's distance from its prediction, in input order (rejected
-  // ones included).
+  // Each glint's distance from its prediction, in input order; a rejected
+  // glint's from the fit it was rejected in.
   std::vector<double> glint_residuals_px;
   double condition = 0;        // of J^T J (0 when not computed)
   int glints_used = 0;

@@ -68,12 +68,13 @@ UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double kappa_horizo
 // The features' noise, for the uncertainty a gaze estimate reports:
 // standard deviations of each glint's and of the pupil's u and v.
 struct FeatureNoise {
-  double glint_px = 0.05;  // our detectors on renders: 0.03 to 0.04 px (docs/trackers.md)
+  double glint_px = 0.05;  // our detectors on the bundled scenes' renders: 0.035 and 0.062 px (docs/calibration.md)
   double pupil_px = 0.05;
 };
 
 struct ModelGaze {
   Point3 cornea_center;
+  bool cornea_determined = false;  // false: cornea_center is the fit's start, not an estimate
   // Row-major, mm^2, of the cornea's centre from the glints' noise.
   std::array<double, 9> cornea_covariance_mm2{};
   Point3 pupil_center;

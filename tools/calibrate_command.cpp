@@ -223,6 +223,7 @@ int run_calibrate(const CalibrateRequest& request) {
   settings.fit_cornea_radius = request.fit_radius;
   settings.fit_pupil_depth = request.fit_pupil_depth;
   settings.pixel_noise_px = noise.glint_px;
+  settings.propagate_noise = noise;
   trackers::ModelGazeCalibration model;
   std::optional<trackers::PolynomialGaze> polynomial;
   try {

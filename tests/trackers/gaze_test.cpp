@@ -292,6 +292,54 @@ TEST(ModelGaze, ReportedUncertaintyMatchesTheScatterUnderFeatureNoise) {
   }
 }
 
+// The calibration's covariances, propagated from the features' noise,
+// against the scatter of kappa and the centre of rotation over noisy
+// draws of the nine calibration frames: within 20%.
+TEST(ModelGaze, CalibrationUncertaintyMatchesTheScatterOfKappaAndTheRotationCentre) {
+  const GazeRig s;
+  std::vector<GazeFeatures> exact;
+  std::vector<Point3> targets;
+  for (const ScreenPoint& target : s.screen.grid(3, 3)) {
+    exact.push_back(*exact_gaze_features(s.view(s.home, target), PupilFeature::refracted_center));
+    targets.push_back(s.screen.at(target));
+  }
+  const FeatureNoise noise{0.1, 0.05};
+  ModelGazeCalibrationSettings propagate;
+  propagate.propagate_noise = noise;
+  const ModelGazeCalibration at_truth =
+      calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, exact, targets, s.tracker_eye(), s.home, propagate);
+  ASSERT_TRUE(at_truth.converged && at_truth.rotation_center);
+  const double reported[5] = {std::sqrt(at_truth.covariance[0]), std::sqrt(at_truth.covariance[3]),
+                              at_truth.rotation_center_sd_mm[0], at_truth.rotation_center_sd_mm[1],
+                              at_truth.rotation_center_sd_mm[2]};
+  std::mt19937 random(11);
+  std::normal_distribution<double> glint(0, noise.glint_px), pupil(0, noise.pupil_px);
+  const int draws = statistics_draws();
+  double sum[5] = {}, sum2[5] = {};
+  for (int draw = 0; draw < draws; ++draw) {
+    std::vector<GazeFeatures> frames = exact;
+    for (GazeFeatures& f : frames) {
+      for (Glint& g : f.glints) g.centre = {g.centre.u + glint(random), g.centre.v + glint(random)};
+      f.pupil_center = {f.pupil_center.u + pupil(random), f.pupil_center.v + pupil(random)};
+    }
+    const ModelGazeCalibration c =
+        calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, frames, targets, s.tracker_eye(), s.home);
+    ASSERT_TRUE(c.converged && c.rotation_center) << draw;
+    const double x[5] = {c.model.kappa_horizontal_rad, c.model.kappa_vertical_rad, c.rotation_center->x,
+                         c.rotation_center->y, c.rotation_center->z};
+    for (int k = 0; k < 5; ++k) sum[k] += x[k], sum2[k] += x[k] * x[k];
+  }
+  const char* names[5] = {"kappa_h", "kappa_v", "rotation_x", "rotation_y", "rotation_z"};
+  for (int k = 0; k < 5; ++k) {
+    const double mean = sum[k] / draws;
+    const double seen = std::sqrt((sum2[k] - draws * mean * mean) / (draws - 1));
+    EXPECT_NEAR(seen / reported[k], 1, 0.2) << names[k] << ": seen " << seen << ", reported " << reported[k];
+    char text[64];
+    std::snprintf(text, sizeof text, "%.3g (reported %.3g)", seen, reported[k]);
+    ::testing::Test::RecordProperty(std::string(names[k]) + "_sd", text);
+  }
+}
+
 TEST(PolynomialGaze, ErrsLittleAtTheCalibrationPositionAndMoreAsTheHeadMoves) {
   const GazeRig s;
   std::vector<GazeFeatures> frames;

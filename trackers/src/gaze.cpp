@@ -266,10 +266,12 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
   return out;
 }
 
-ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
-                                          const std::vector<GazeFeatures>& frames,
-                                          const std::vector<Point3>& targets, const GazeEyeModel& initial,
-                                          const Point3& start, const ModelGazeCalibrationSettings& settings) {
+namespace {
+
+ModelGazeCalibration calibrate_once(const Camera& camera, const std::vector<Illuminator>& lights,
+                                    const std::vector<GazeFeatures>& frames, const std::vector<Point3>& targets,
+                                    const GazeEyeModel& initial, const Point3& start,
+                                    const ModelGazeCalibrationSettings& settings) {
   const int n = settings.fit_pupil_depth ? 3 : 2;
   if (frames.size() != targets.size()) {
     throw std::invalid_argument("calibrate_model_gaze: " + std::to_string(frames.size()) + " frames but " +
@@ -413,6 +415,86 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
     out.rotation_center = Point3{x[0], x[1], x[2]};
     out.rotation_distance_mm = x[3];
     for (int k = 0; k < 3; ++k) out.rotation_center_sd_mm[k] = std::sqrt(covariance(k, k));
+  }
+  return out;
+}
+
+// The calibration's estimates as one vector: kappa (and the depth), then
+// the centre of rotation when placed.
+std::vector<double> estimates(const ModelGazeCalibration& c, bool depth) {
+  std::vector<double> x{c.model.kappa_horizontal_rad, c.model.kappa_vertical_rad};
+  if (depth) x.push_back(c.model.pupil_depth_mm);
+  if (c.rotation_center) x.insert(x.end(), {c.rotation_center->x, c.rotation_center->y, c.rotation_center->z});
+  return x;
+}
+
+}  // namespace
+
+ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
+                                          const std::vector<GazeFeatures>& frames,
+                                          const std::vector<Point3>& targets, const GazeEyeModel& initial,
+                                          const Point3& start, const ModelGazeCalibrationSettings& settings) {
+  ModelGazeCalibration out = calibrate_once(camera, lights, frames, targets, initial, start, settings);
+  if (!settings.propagate_noise || !out.converged || out.covariance.empty()) return out;
+  // Each feature coordinate moved both ways by a small step, the whole
+  // calibration run again from the estimate: the Jacobian of the
+  // estimates by the features, and their covariance J diag(sd^2) J^T.
+  const FeatureNoise noise = *settings.propagate_noise;
+  const bool depth = settings.fit_pupil_depth;
+  const std::vector<double> center = estimates(out, depth);
+  const Eigen::Index k = static_cast<Eigen::Index>(center.size());
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(k, k);
+  constexpr double step_px = 1e-3;
+  ModelGazeCalibrationSettings once = settings;
+  once.propagate_noise.reset();
+  const GazeEyeModel from = out.model;
+  const auto add = [&](const std::vector<GazeFeatures>& plus, const std::vector<GazeFeatures>& minus, double sd) {
+    const ModelGazeCalibration p = calibrate_once(camera, lights, plus, targets, from, start, once);
+    const ModelGazeCalibration m = calibrate_once(camera, lights, minus, targets, from, start, once);
+    const std::vector<double> xp = estimates(p, depth), xm = estimates(m, depth);
+    if (!p.converged || !m.converged || static_cast<Eigen::Index>(xp.size()) != k ||
+        static_cast<Eigen::Index>(xm.size()) != k) {
+      return false;
+    }
+    Eigen::VectorXd column(k);
+    for (Eigen::Index i = 0; i < k; ++i) column[i] = (xp[i] - xm[i]) / (2 * step_px);
+    covariance += sd * sd * column * column.transpose();
+    return true;
+  };
+  bool ok = true;
+  for (std::size_t f = 0; f < frames.size() && ok; ++f) {
+    for (std::size_t g = 0; g < frames[f].glints.size() && ok; ++g) {
+      if (frames[f].glints[g].illuminator < 0) continue;
+      for (int axis = 0; axis < 2 && ok; ++axis) {
+        std::vector<GazeFeatures> plus = frames, minus = frames;
+        (axis == 0 ? plus[f].glints[g].centre.u : plus[f].glints[g].centre.v) += step_px;
+        (axis == 0 ? minus[f].glints[g].centre.u : minus[f].glints[g].centre.v) -= step_px;
+        ok = add(plus, minus, noise.glint_px);
+      }
+    }
+    // The pupil moved as a whole: its centre and its outline together.
+    for (int axis = 0; axis < 2 && ok; ++axis) {
+      std::vector<GazeFeatures> plus = frames, minus = frames;
+      const auto shift = [&](GazeFeatures& moved, double by) {
+        (axis == 0 ? moved.pupil_center.u : moved.pupil_center.v) += by;
+        for (Pixel& p : moved.pupil_outline) (axis == 0 ? p.u : p.v) += by;
+      };
+      shift(plus[f], step_px);
+      shift(minus[f], -step_px);
+      ok = add(plus, minus, noise.pupil_px);
+    }
+  }
+  if (!ok) {
+    out.warnings.push_back("uncertainty from the residuals' scatter: the calibration fails for features a "
+                           "thousandth of a pixel away");
+    return out;
+  }
+  const Eigen::Index n = depth ? 3 : 2;
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b < n; ++b) out.covariance[a * n + b] = covariance(a, b);
+  }
+  if (out.rotation_center) {
+    for (int i = 0; i < 3; ++i) out.rotation_center_sd_mm[i] = std::sqrt(covariance(n + i, n + i));
   }
   return out;
 }

@@ -125,13 +125,20 @@ struct ModelGazeCalibrationSettings {
   bool fit_pupil_depth = false;   // with kappa
   bool fit_cornea_radius = false;  // from all frames' glints together
   double pixel_noise_px = 0.1;    // of the glints, for the cornea fit's covariance
+  // Given: the covariances of kappa (and the pupil's depth) and of the
+  // centre of rotation by first-order propagation of this noise through
+  // the whole calibration (central differences: two calibrations per
+  // feature coordinate). Absent: from the residuals' scatter, which
+  // misjudges them (docs/calibration.md).
+  std::optional<FeatureNoise> propagate_noise;
 };
 
 struct ModelGazeCalibration {
   GazeEyeModel model;  // with the fitted values
   // Row-major covariance of (kappa horizontal, kappa vertical[, pupil
-  // depth]) in rad and mm, from the residuals' scatter about the fit;
-  // empty when the targets do not determine them.
+  // depth]) in rad and mm, propagated from the features' noise or from the
+  // residuals' scatter (settings); empty when the targets do not
+  // determine them.
   std::vector<double> covariance;
   double cornea_radius_sd_mm = 0;  // when fitted
   double rms_error_rad = 0;        // angle between the visual axes and the targets, after the fit
@@ -139,7 +146,7 @@ struct ModelGazeCalibration {
   // The eye's centre of rotation, for a head held still: each frame's
   // cornea centre lies a fixed distance from it along its optical axis,
   // c = r + d o (linear least squares in r and d), with the s.d. of r's
-  // coordinates from the residuals' scatter. Absent when the axes are too
+  // coordinates as the covariance above. Absent when the axes are too
   // alike to place it.
   std::optional<Point3> rotation_center;
   double rotation_distance_mm = 0;  // d

@@ -74,22 +74,40 @@ UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double h, double v)
   return UnitVector3::normalize(world_from_eye_rotation(optical_axis) * in_eye);
 }
 
-std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
-                                                   const Pixel& pupil_center, const GazeEyeModel& model) {
-  const UnitVector3 ray = camera.back_project(pupil_center);
+namespace {
+
+// A pixel's camera ray refracted into the model's cornea (Snell's law in
+// vector form): where it enters, relative to the cornea's centre, and its
+// unit direction inside. nullopt when the ray misses the cornea.
+struct RefractedRay {
+  Vector3 entry;
+  Vector3 inside;
+};
+
+std::optional<RefractedRay> refract_into_cornea(const Camera& camera, const Point3& cornea_center,
+                                                const Pixel& pixel, const GazeEyeModel& model) {
+  const UnitVector3 ray = camera.back_project(pixel);
   const Point3 o = camera.center();
   const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, model.cornea_radius_mm);
   if (!to_cornea) return std::nullopt;
-  const Point3 entry = o + *to_cornea * ray;
-  const Vector3 normal = (entry - cornea_center) / model.cornea_radius_mm;
-  // Snell's law in vector form, from air into the eye.
+  const Vector3 entry = (o + *to_cornea * ray) - cornea_center;
+  const Vector3 normal = entry / model.cornea_radius_mm;
   const double eta = 1 / model.refractive_index;
   const double cos_in = -dot(normal, ray);
   const double sin2_out = eta * eta * (1 - cos_in * cos_in);
-  const Vector3 inside = eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal;
-  const std::optional<double> to_pupil = enter_sphere(entry, inside, cornea_center, model.pupil_depth_mm);
+  return RefractedRay{entry, eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal};
+}
+
+}  // namespace
+
+std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
+                                                   const Pixel& pupil_center, const GazeEyeModel& model) {
+  const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, pupil_center, model);
+  if (!ray) return std::nullopt;
+  const Point3 entry = cornea_center + ray->entry;
+  const std::optional<double> to_pupil = enter_sphere(entry, ray->inside, cornea_center, model.pupil_depth_mm);
   if (!to_pupil) return std::nullopt;
-  const Point3 pupil = entry + *to_pupil * inside;
+  const Point3 pupil = entry + *to_pupil * ray->inside;
   const std::optional<UnitVector3> axis = UnitVector3::try_normalize(pupil - cornea_center);
   if (!axis) return std::nullopt;
   return OpticalAxis{pupil, *axis};
@@ -101,24 +119,13 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
                                                            const std::optional<UnitVector3>& start) {
   // Entry points relative to the cornea's centre: the fixed point's
   // changes near convergence are far below a world coordinate's rounding.
-  struct Ray {
-    Vector3 entry;
-    Vector3 inside;
-  };
-  std::vector<Ray> rays;
+  std::vector<RefractedRay> rays;
   Vector3 middle;
-  const Point3 o = camera.center();
-  const double eta = 1 / model.refractive_index;
   for (const Pixel& p : outline) {
-    const UnitVector3 ray = camera.back_project(p);
-    const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, model.cornea_radius_mm);
-    if (!to_cornea) continue;
-    const Vector3 entry = (o + *to_cornea * ray) - cornea_center;
-    const Vector3 normal = entry / model.cornea_radius_mm;
-    const double cos_in = -dot(normal, ray);
-    const double sin2_out = eta * eta * (1 - cos_in * cos_in);
-    rays.push_back({entry, eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal});
-    middle += entry;
+    const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, p, model);
+    if (!ray) continue;
+    rays.push_back(*ray);
+    middle += ray->entry;
   }
   if (rays.size() < 5) return std::nullopt;
   std::optional<UnitVector3> axis = UnitVector3::try_normalize(middle);

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "purkinje/models/optimizer.h"
-#include "purkinje/trackers/sphere_glint.h"
+#include "purkinje/trackers/cornea_glint.h"
 
 namespace purkinje::trackers {
 
@@ -214,7 +214,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     for (std::size_t i = 0; i < glints.size(); ++i) {
       const GlintObservation& o = glints[i];
       const double* c = x + 3 * o.frame;
-      const std::optional<SphereGlint> g =
+      const std::optional<CorneaGlint> g =
           sphere_glint(cameras[o.camera], {c[0], c[1], c[2]}, radius, lights[o.light].position, warm[i],
                        jacobian != nullptr);
       if (!g) return false;

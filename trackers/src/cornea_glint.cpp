@@ -1,4 +1,4 @@
-#include "purkinje/trackers/sphere_glint.h"
+#include "purkinje/trackers/cornea_glint.h"
 
 #include <Eigen/Dense>
 
@@ -97,9 +97,63 @@ bool glint_normal(const Vec3& c, double radius, const Vec3& l, const Vec3& o,
   return true;
 }
 
+// The law of reflection on a conicoid, in world terms. With s = P - C and
+// z = a.s along the axis a, the surface x^2 + y^2 + (1 + Q) w^2 - 2 R w = 0
+// (w = R - z from the apex) is
+//   F = |s|^2 - z^2 + (1 + Q)(R - z)^2 - 2 R (R - z) = 0,
+// with gradient g = 2 s - 2 Q (R - z) a (outward) and Hessian
+// H = 2 I + 2 Q a a^T. The glint solves E(P) = 0: F / |g| and the
+// tangent components of hu - n, hu the unit sum of the directions from P
+// to the light and to the camera, n = g / |g|.
+struct ConicoidReflection {
+  Vec3 c, a, l, o;
+  double radius, q;
+  Eigen::Matrix3d hessian;
+
+  struct At {
+    Vec3 residual, n;
+    Eigen::Matrix3d jacobian;             // dE/dP
+    Eigen::Matrix<double, 2, 3> tangent;  // rows: a basis of the tangent plane
+    double g_norm = 0;
+    double z = 0;  // a.(P - C)
+  };
+
+  At at(const Vec3& p) const {
+    At e;
+    const Vec3 s = p - c;
+    e.z = a.dot(s);
+    const double z = e.z;
+    const Vec3 g = 2 * s - 2 * q * (radius - z) * a;
+    e.g_norm = g.norm();
+    e.n = g / e.g_norm;
+    const double f = s.squaredNorm() - z * z + (1 + q) * (radius - z) * (radius - z) - 2 * radius * (radius - z);
+    const Vec3 to_light = l - p, to_camera = o - p;
+    const double dl = to_light.norm(), dc = to_camera.norm();
+    const Vec3 lu = to_light / dl, cu = to_camera / dc;
+    const Vec3 h = lu + cu;
+    const double h_norm = h.norm();
+    const Vec3 hu = h / h_norm;
+    Vec3 axis = Vec3::Zero();
+    int least = 0;
+    e.n.cwiseAbs().minCoeff(&least);
+    axis[least] = 1;
+    e.tangent.row(0) = e.n.cross(axis).normalized().transpose();
+    e.tangent.row(1) = e.n.cross(e.tangent.row(0).transpose()).transpose();
+    const Eigen::Matrix3d i3 = Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d d_direction = (i3 - lu * lu.transpose()) / dl + (i3 - cu * cu.transpose()) / dc;
+    // dF/dP / |g| = n where F = 0; the tangent basis is held fixed, which
+    // costs nothing at the answer, where hu - n = 0.
+    e.jacobian.row(0) = e.n.transpose();
+    e.jacobian.bottomRows<2>() = e.tangent * (-(i3 - hu * hu.transpose()) * d_direction / h_norm -
+                                              (i3 - e.n * e.n.transpose()) * hessian / e.g_norm);
+    e.residual = {f / e.g_norm, e.tangent.row(0).dot(hu - e.n), e.tangent.row(1).dot(hu - e.n)};
+    return e;
+  }
+};
+
 }  // namespace
 
-std::optional<SphereGlint> sphere_glint(const Camera& camera, const Point3& center, double radius_mm,
+std::optional<CorneaGlint> sphere_glint(const Camera& camera, const Point3& center, double radius_mm,
                                         const Point3& light, const std::optional<UnitVector3>& warm_start,
                                         bool with_derivatives) {
   if (!(radius_mm > 0) || !center.is_finite() || !light.is_finite()) return std::nullopt;
@@ -112,7 +166,7 @@ std::optional<SphereGlint> sphere_glint(const Camera& camera, const Point3& cent
   // Past grazing, the point cannot see the light or the camera.
   if (!(to_light.dot(n) > 0) || !(to_camera.dot(n) > 0)) return std::nullopt;
 
-  SphereGlint out;
+  CorneaGlint out;
   out.point = {p.x(), p.y(), p.z()};
   out.normal = UnitVector3::from_normalized_unchecked({n.x(), n.y(), n.z()});
   std::array<double, 6> d_pixel_d_point{};
@@ -147,6 +201,66 @@ std::optional<SphereGlint> sphere_glint(const Camera& camera, const Point3& cent
   Eigen::Matrix<double, 3, 4> d_point;
   d_point.leftCols<3>() = Eigen::Matrix3d::Identity() - radius_mm * u * inverse * ua;
   d_point.col(3) = n - radius_mm * u * (inverse * (ua * n));
+  const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
+  const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
+  for (int row = 0; row < 2; ++row) {
+    for (int k = 0; k < 4; ++k) out.d_pixel[4 * row + k] = chained(row, k);
+  }
+  return out;
+}
+
+std::optional<CorneaGlint> conicoid_glint(const Camera& camera, const Point3& center, const UnitVector3& optical_axis,
+                                          const Conicoid& cornea, const Point3& light,
+                                          const std::optional<UnitVector3>& warm_start, bool with_derivatives) {
+  if (cornea.is_sphere()) {
+    return sphere_glint(camera, center, cornea.radius_mm, light, warm_start, with_derivatives);
+  }
+  const double radius = cornea.radius_mm, q = cornea.asphericity;
+  if (!(q > -1) || !std::isfinite(q)) return std::nullopt;
+  // The apex sphere osculates the conicoid at the apex: its glint is the start.
+  const std::optional<CorneaGlint> start = sphere_glint(camera, center, radius, light, warm_start, false);
+  if (!start) return std::nullopt;
+  const Vec3 a(optical_axis.x(), optical_axis.y(), optical_axis.z());
+  const ConicoidReflection law{eigen(center), a, eigen(light), eigen(camera.center()), radius, q,
+                               2 * Eigen::Matrix3d::Identity() + 2 * q * a * a.transpose()};
+  Vec3 p = eigen(start->point);
+  bool converged = false;
+  for (int i = 0; i < 30 && !converged; ++i) {
+    const ConicoidReflection::At e = law.at(p);
+    Vec3 step = -e.jacobian.partialPivLu().solve(e.residual);
+    if (!step.allFinite()) return std::nullopt;
+    // Newton's error squares with each step: after a step of 1e-8 R,
+    // rounding is left.
+    converged = step.norm() < 1e-8 * radius;
+    const double longest = 0.25 * radius;  // a long step would leave the cap
+    if (step.norm() > longest) step *= longest / step.norm();
+    p += step;
+  }
+  if (!converged) return std::nullopt;
+  const ConicoidReflection::At e = law.at(p);
+  // Beyond the equator (w > R / (1 + Q)) the surface faces into the head.
+  if (!(e.z > radius - radius / (1 + q))) return std::nullopt;
+  if (!((law.l - p).dot(e.n) > 0) || !((law.o - p).dot(e.n) > 0)) return std::nullopt;
+
+  CorneaGlint out;
+  out.point = {p.x(), p.y(), p.z()};
+  out.normal = UnitVector3::from_normalized_unchecked({e.n.x(), e.n.y(), e.n.z()});
+  std::array<double, 6> d_pixel_d_point{};
+  const Projection projection =
+      with_derivatives ? camera.project(out.point, d_pixel_d_point) : camera.project(out.point);
+  if (projection.status == ProjectionStatus::behind_camera) return std::nullopt;
+  out.pixel = projection.pixel;
+  if (!with_derivatives) return out;
+
+  // The implicit function theorem on the same equations: dP/d(C, R) =
+  // -(dE/dP)^-1 dE/d(C, R). F depends on C through s (dF/dC = -g) and on
+  // R directly; n through g (dg/dC = -H, dg/dR = -2 Q a).
+  Eigen::Matrix<double, 3, 4> d_equations;
+  d_equations.block<1, 3>(0, 0) = -e.n.transpose();
+  d_equations(0, 3) = (2 * q * (radius - e.z) - 2 * radius) / e.g_norm;
+  d_equations.block<2, 3>(1, 0) = e.tangent * law.hessian / e.g_norm;
+  d_equations.block<2, 1>(1, 3) = e.tangent * (2 * q * a) / e.g_norm;
+  const Eigen::Matrix<double, 3, 4> d_point = -e.jacobian.partialPivLu().solve(d_equations);
   const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
   const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
   for (int row = 0; row < 2; ++row) {

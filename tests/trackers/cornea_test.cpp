@@ -95,6 +95,32 @@ TEST(CorneaCenter, ComesBackToTheTrueCentreFromTheRemotesExactGlints) {
   expect_exact_centre(remote_with_spherical_cornea());  // two lights at 600 mm
 }
 
+// The remote's own eye is Navarro's: an aspheric cornea (R 7.72 mm at
+// the apex, Q = -0.26). Modelled as such, with its optical axis, its
+// centre comes back exactly; a sphere of its apex radius misplaces it by
+// millimetres in depth.
+TEST(CorneaCenter, ComesBackToTheRemotesAsphericCorneaWithItsAxis) {
+  const Scene scene = bundled("remote");
+  const Eye& eye = scene.eyes[0];
+  ASSERT_EQ(eye.model().anterior_cornea.asphericity, -0.26);
+  const std::vector<Glint> glints = exact_glints(scene);
+  CorneaFitSettings conicoid;
+  conicoid.cornea_radius_mm = 7.72;
+  conicoid.cornea_asphericity = -0.26;
+  const Point3 start = eye.cornea_center() + Vector3{2, -1.5, 3};
+  const CorneaFit fit = estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, start, conicoid,
+                                               eye.optical_axis());
+  EXPECT_TRUE(fit.converged);
+  EXPECT_LT(distance(fit.centers[0], eye.cornea_center()), 1e-6);
+  CorneaFitSettings sphere = conicoid;
+  sphere.cornea_asphericity = 0;
+  const CorneaFit off = estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, start, sphere);
+  EXPECT_GT(distance(off.centers[0], eye.cornea_center()), 1.0);
+  // Without its axis a conicoid cannot be fitted: said, not guessed.
+  EXPECT_THROW(estimate_cornea_center(scene.cameras[0], scene.illuminators, glints, start, conicoid),
+               std::invalid_argument);
+}
+
 // From 600 mm with two lights, the glints' spacing is what tells depth:
 // it changes little with it, so depth is the weak direction.
 TEST(CorneaCenter, DepthIsTheWeakDirectionFromAfar) {
@@ -288,6 +314,7 @@ TEST(CorneaFit, RejectsBadSettingsAndUnknownIndicesByName) {
   EXPECT_NE(message({.radius_prior_sd_mm = -1}, fine).find("radius_prior_sd_mm = -1"), std::string::npos);
   EXPECT_NE(message({.max_sd_mm = 0}, fine).find("max_sd_mm"), std::string::npos);
   EXPECT_NE(message({.reject_beyond_sd = -1}, fine).find("reject_beyond_sd = -1"), std::string::npos);
+  EXPECT_NE(message({.cornea_asphericity = -1}, fine).find("cornea_asphericity = -1"), std::string::npos);
   EXPECT_NE(message({}, {{0, 0, 99, {1, 1}}}).find("light = 99"), std::string::npos);
   EXPECT_NE(message({}, {{0, 3, 0, {1, 1}}}).find("camera = 3"), std::string::npos);
   EXPECT_NE(message({}, {{2, 0, 0, {1, 1}}}).find("frame = 2"), std::string::npos);

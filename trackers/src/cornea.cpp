@@ -40,6 +40,9 @@ void check(const CorneaFitSettings& s) {
     fail("pixel_noise_px", s.pixel_noise_px, "must be > 0");
   }
   if (!(s.max_sd_mm > 0)) fail("max_sd_mm", s.max_sd_mm, "must be > 0");
+  if (!(s.cornea_asphericity > -1 && s.cornea_asphericity < 10)) {
+    fail("cornea_asphericity", s.cornea_asphericity, "must be in (-1, 10): an ellipsoid's Q");
+  }
 }
 
 // The direction an uncertainty runs along, for a warning.
@@ -165,7 +168,7 @@ namespace {
 
 CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
                    const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
-                   const CorneaFitSettings& s) {
+                   const CorneaFitSettings& s, const std::vector<UnitVector3>& axes) {
   const int frames = static_cast<int>(starts.size());
   if (frames == 0) throw std::invalid_argument("fit_cornea: no frames (starts is empty)");
   std::vector<int> per_frame(frames, 0);
@@ -208,6 +211,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   const int n = 3 * frames + (s.fit_radius ? 1 : 0);
   const int m = 2 * static_cast<int>(glints.size()) + (prior ? 1 : 0);
   std::vector<std::optional<UnitVector3>> warm(glints.size());
+  const bool sphere = s.cornea_asphericity == 0;
   const optimizer::ResidualFunction residuals = [&](const double* x, double* r, double* jacobian) {
     const double radius = s.fit_radius ? x[n - 1] : s.cornea_radius_mm;
     if (jacobian != nullptr) std::fill_n(jacobian, static_cast<std::size_t>(m) * n, 0.0);
@@ -215,8 +219,11 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
       const GlintObservation& o = glints[i];
       const double* c = x + 3 * o.frame;
       const std::optional<CorneaGlint> g =
-          sphere_glint(cameras[o.camera], {c[0], c[1], c[2]}, radius, lights[o.light].position, warm[i],
-                       jacobian != nullptr);
+          sphere ? sphere_glint(cameras[o.camera], {c[0], c[1], c[2]}, radius, lights[o.light].position, warm[i],
+                                jacobian != nullptr)
+                 : conicoid_glint(cameras[o.camera], {c[0], c[1], c[2]}, axes[o.frame],
+                                  Conicoid{radius, s.cornea_asphericity}, lights[o.light].position, warm[i],
+                                  jacobian != nullptr);
       if (!g) return false;
       warm[i] = g->normal;
       r[2 * i] = g->pixel.u - o.pixel.u;
@@ -239,7 +246,8 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   };
 
   // Each frame starts where its first camera's glints put a sphere of the
-  // start's radius, or at the caller's start where they do not.
+  // start's radius (for a conicoid, its apex sphere: millimetres off in
+  // depth), or at the caller's start where they do not.
   std::vector<double> x(n);
   for (int f = 0; f < frames; ++f) {
     Point3 start = starts[f];
@@ -317,8 +325,14 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
 
 CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
                      const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
-                     const CorneaFitSettings& s) {
+                     const CorneaFitSettings& s, const std::vector<UnitVector3>& optical_axes) {
   check(s);
+  if (s.cornea_asphericity != 0 && optical_axes.size() != starts.size()) {
+    throw std::invalid_argument("fit_cornea: a conicoid cornea (cornea_asphericity = " +
+                                number(s.cornea_asphericity) + ") needs one optical axis per frame: " +
+                                std::to_string(optical_axes.size()) + " for " + std::to_string(starts.size()) +
+                                " frames");
+  }
   if (!(s.reject_beyond_sd >= 0)) {
     throw std::invalid_argument("CorneaFitSettings: reject_beyond_sd = " + number(s.reject_beyond_sd) +
                                 ": must be >= 0 (0: no rejection)");
@@ -331,7 +345,7 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
   for (;;) {
     std::vector<GlintObservation> used;
     for (const int i : kept) used.push_back(glints[i]);
-    CorneaFit fit = fit_once(cameras, lights, used, starts, s);
+    CorneaFit fit = fit_once(cameras, lights, used, starts, s, optical_axes);
     // The worst glint beyond the bound whose frame can spare it.
     int worst = -1;
     if (s.reject_beyond_sd > 0 && fit.converged && fit.has_covariance() &&
@@ -370,13 +384,15 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
 
 CorneaFit estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
                                  const std::vector<Glint>& glints, const Point3& start,
-                                 const CorneaFitSettings& settings) {
+                                 const CorneaFitSettings& settings, const std::optional<UnitVector3>& optical_axis) {
   std::vector<GlintObservation> observed;
   observed.reserve(glints.size());
   for (const Glint& g : glints) {
     if (g.illuminator >= 0) observed.push_back({0, 0, g.illuminator, g.centre});
   }
-  return fit_cornea({camera}, lights, observed, {start}, settings);
+  std::vector<UnitVector3> axes;
+  if (optical_axis) axes.push_back(*optical_axis);
+  return fit_cornea({camera}, lights, observed, {start}, settings, axes);
 }
 
 }  // namespace purkinje::trackers

@@ -78,31 +78,56 @@ namespace {
 
 // A pixel's camera ray refracted into the model's cornea (Snell's law in
 // vector form): where it enters, relative to the cornea's centre, and its
-// unit direction inside. nullopt when the ray misses the cornea.
+// unit direction inside. A conicoid cornea's apex points along `axis`.
+// nullopt when the ray misses the cornea.
 struct RefractedRay {
   Vector3 entry;
   Vector3 inside;
 };
 
 std::optional<RefractedRay> refract_into_cornea(const Camera& camera, const Point3& cornea_center,
-                                                const Pixel& pixel, const GazeEyeModel& model) {
+                                                const UnitVector3& axis, const Pixel& pixel,
+                                                const GazeEyeModel& model) {
   const UnitVector3 ray = camera.back_project(pixel);
   const Point3 o = camera.center();
-  const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, model.cornea_radius_mm);
-  if (!to_cornea) return std::nullopt;
-  const Vector3 entry = (o + *to_cornea * ray) - cornea_center;
-  const Vector3 normal = entry / model.cornea_radius_mm;
+  const double radius = model.cornea_radius_mm, q = model.cornea_asphericity;
+  Vector3 entry, normal;
+  if (q == 0) {
+    const std::optional<double> to_cornea = enter_sphere(o, ray, cornea_center, radius);
+    if (!to_cornea) return std::nullopt;
+    entry = (o + *to_cornea * ray) - cornea_center;
+    normal = entry / radius;
+  } else {
+    // The conicoid of cornea_glint.h, F(s) = |s|^2 - z^2 + (1 + Q)(R - z)^2
+    // - 2 R (R - z) with z = a.s, along s = s0 + t d: a quadratic in t.
+    const Vector3 s0 = o - cornea_center;
+    const double z0 = dot(axis, s0), dz = dot(axis, ray.vector());
+    const double a = 1 + q * dz * dz;
+    const double half_b = dot(s0, ray.vector()) - q * (radius - z0) * dz;
+    const double c = s0.squared_norm() - z0 * z0 + (1 + q) * (radius - z0) * (radius - z0) - 2 * radius * (radius - z0);
+    const double discriminant = half_b * half_b - a * c;
+    if (!(discriminant >= 0) || !(a > 0)) return std::nullopt;
+    const double t = (-half_b - std::sqrt(discriminant)) / a;
+    if (!(t > 0)) return std::nullopt;
+    entry = s0 + t * ray.vector();
+    const double z = dot(axis, entry);
+    // In front of the equator only: behind it the ray would enter the head.
+    if (!(z > radius - radius / (1 + q))) return std::nullopt;
+    const Vector3 g = entry - q * (radius - z) * axis.vector();
+    normal = g / g.norm();
+  }
   const double eta = 1 / model.refractive_index;
   const double cos_in = -dot(normal, ray);
   const double sin2_out = eta * eta * (1 - cos_in * cos_in);
   return RefractedRay{entry, eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal};
 }
 
-}  // namespace
-
-std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
-                                                   const Pixel& pupil_center, const GazeEyeModel& model) {
-  const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, pupil_center, model);
+// The optical axis from the imaged pupil centre with a given cornea axis
+// (for a conicoid's refraction).
+std::optional<OpticalAxis> axis_from_center(const Camera& camera, const Point3& cornea_center,
+                                            const UnitVector3& cornea_axis, const Pixel& pupil_center,
+                                            const GazeEyeModel& model) {
+  const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, cornea_axis, pupil_center, model);
   if (!ray) return std::nullopt;
   const Point3 entry = cornea_center + ray->entry;
   const std::optional<double> to_pupil = enter_sphere(entry, ray->inside, cornea_center, model.pupil_depth_mm);
@@ -113,6 +138,28 @@ std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const P
   return OpticalAxis{pupil, *axis};
 }
 
+// A conicoid's refraction depends on the axis being sought: a fixed point,
+// which settles within a few steps since the refraction hardly turns with
+// the axis.
+constexpr int kAxisIterations = 50;
+
+}  // namespace
+
+std::optional<OpticalAxis> optical_axis_from_pupil(const Camera& camera, const Point3& cornea_center,
+                                                   const Pixel& pupil_center, const GazeEyeModel& model) {
+  // The eye faces the camera, near enough for a start.
+  std::optional<UnitVector3> axis = UnitVector3::try_normalize(camera.center() - cornea_center);
+  if (!axis) return std::nullopt;
+  for (int i = 0; i < kAxisIterations; ++i) {
+    const std::optional<OpticalAxis> next = axis_from_center(camera, cornea_center, *axis, pupil_center, model);
+    if (!next || model.cornea_asphericity == 0) return next;
+    const double step = angle_between(next->direction, *axis);
+    axis = next->direction;
+    if (step < 1e-12) return next;
+  }
+  return std::nullopt;
+}
+
 std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera, const Point3& cornea_center,
                                                            const std::vector<Pixel>& outline,
                                                            const GazeEyeModel& model,
@@ -120,22 +167,35 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
   // Entry points relative to the cornea's centre: the fixed point's
   // changes near convergence are far below a world coordinate's rounding.
   std::vector<RefractedRay> rays;
-  Vector3 middle;
-  for (const Pixel& p : outline) {
-    const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, p, model);
-    if (!ray) continue;
-    rays.push_back(*ray);
-    middle += ray->entry;
-  }
-  if (rays.size() < 5) return std::nullopt;
-  std::optional<UnitVector3> axis = UnitVector3::try_normalize(middle);
-  if (start) axis = *start;
+  std::optional<UnitVector3> axis = start;
+  if (!axis) axis = UnitVector3::try_normalize(camera.center() - cornea_center);
   if (!axis) return std::nullopt;
+  // For a sphere the rays do not depend on the axis: traced once.
+  const auto trace = [&] {
+    rays.clear();
+    for (const Pixel& p : outline) {
+      const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, *axis, p, model);
+      if (ray) rays.push_back(*ray);
+    }
+    return rays.size() >= 5;
+  };
+  if (!trace()) return std::nullopt;
+  if (!start) {
+    Vector3 middle;
+    for (const RefractedRay& r : rays) middle += r.entry;
+    axis = UnitVector3::try_normalize(middle);
+    if (!axis) return std::nullopt;
+  }
   const double depth = model.pupil_depth_mm;
   Eigen::MatrixXd a(static_cast<Eigen::Index>(rays.size()), 3);
   Eigen::VectorXd b(static_cast<Eigen::Index>(rays.size()));
   double change = INFINITY;
   for (int iteration = 0; iteration < 200; ++iteration) {
+    if (model.cornea_asphericity != 0 && iteration > 0 && !trace()) return std::nullopt;
+    if (static_cast<Eigen::Index>(rays.size()) != a.rows()) {
+      a.resize(static_cast<Eigen::Index>(rays.size()), 3);
+      b.resize(static_cast<Eigen::Index>(rays.size()));
+    }
     // The rays meet the plane across the axis at the pupil's depth; a
     // circle fitted there (Kasa: linear in the centre and radius) gives
     // the centre whatever the points' spacing.
@@ -179,6 +239,55 @@ std::optional<OpticalAxis> pupil_axis(const Camera& camera, const Point3& cornea
                                          from_center ? std::optional<UnitVector3>(from_center->direction) : std::nullopt);
 }
 
+// The cornea's centres from the frames' glints, and each frame's optical
+// axis from its pupil. A conicoid's glints depend on the axis and the
+// axis on the centre: they alternate, from a sphere of the apex radius,
+// until the centres settle. `glints` are the frames' told glints.
+struct CorneaAndAxes {
+  CorneaFit cornea;
+  std::vector<std::optional<OpticalAxis>> axes;  // per frame; nullopt where the pupil's ray misses the model
+  bool settled = true;
+};
+
+CorneaAndAxes cornea_and_axes(const Camera& camera, const std::vector<Illuminator>& lights,
+                              const std::vector<GlintObservation>& glints, const std::vector<GazeFeatures>& frames,
+                              const GazeEyeModel& model, const CorneaFitSettings& settings,
+                              std::vector<Point3> starts) {
+  CorneaAndAxes out;
+  CorneaFitSettings sphere = settings;
+  sphere.cornea_asphericity = 0;
+  const auto axes_at = [&](const CorneaFit& fit) {
+    out.axes.clear();
+    for (std::size_t f = 0; f < frames.size(); ++f) out.axes.push_back(pupil_axis(camera, fit.centers[f], frames[f], model));
+  };
+  out.cornea = fit_cornea({camera}, lights, glints, starts, sphere);
+  if (!out.cornea.converged || !out.cornea.has_covariance()) return out;
+  axes_at(out.cornea);
+  if (model.cornea_asphericity == 0) return out;
+  CorneaFitSettings conicoid = settings;
+  conicoid.cornea_asphericity = model.cornea_asphericity;
+  out.settled = false;
+  for (int pass = 0; pass < kAxisIterations && !out.settled; ++pass) {
+    std::vector<UnitVector3> directions;
+    for (const std::optional<OpticalAxis>& a : out.axes) {
+      if (!a) return out;
+      directions.push_back(a->direction);
+    }
+    starts = out.cornea.centers;
+    out.cornea = fit_cornea({camera}, lights, glints, starts, conicoid, directions);
+    if (!out.cornea.converged || !out.cornea.has_covariance()) return out;
+    axes_at(out.cornea);
+    // Settled at 1e-10 of the distance: far below any noise, near rounding.
+    double moved = 0, scale = 1;
+    for (std::size_t f = 0; f < starts.size(); ++f) {
+      moved = std::max(moved, distance(starts[f], out.cornea.centers[f]));
+      scale = std::max(scale, distance(camera.center(), out.cornea.centers[f]));
+    }
+    out.settled = moved < 1e-10 * scale;
+  }
+  return out;
+}
+
 // The estimate without its uncertainty.
 ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& lights, const GazeFeatures& features,
                      const GazeEyeModel& model, const Screen& screen, const Point3& start, double glint_noise_px,
@@ -188,7 +297,12 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
   settings.cornea_radius_mm = model.cornea_radius_mm;
   settings.pixel_noise_px = glint_noise_px;
   settings.reject_beyond_sd = reject_beyond_sd;
-  const CorneaFit cornea = estimate_cornea_center(camera, lights, features.glints, start, settings);
+  std::vector<GlintObservation> glints;
+  for (const Glint& g : features.glints) {
+    if (g.illuminator >= 0) glints.push_back({0, 0, g.illuminator, g.centre});
+  }
+  const CorneaAndAxes fitted = cornea_and_axes(camera, lights, glints, {features}, model, settings, {start});
+  const CorneaFit& cornea = fitted.cornea;
   out.warnings = cornea.warnings;
   out.cornea_center = cornea.centers.front();
   if (rejected != nullptr) *rejected = cornea.rejected;
@@ -196,9 +310,13 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
     out.warnings.push_back("no gaze: the cornea's centre is not determined by the glints");
     return out;
   }
+  if (!fitted.settled) {
+    out.warnings.push_back("no gaze: the conicoid cornea's centre and the pupil's axis did not settle together");
+    return out;
+  }
   out.cornea_determined = true;
   out.cornea_covariance_mm2 = cornea.center_covariance(0);
-  const std::optional<OpticalAxis> axis = pupil_axis(camera, out.cornea_center, features, model);
+  const std::optional<OpticalAxis>& axis = fitted.axes.front();
   if (!axis) {
     out.warnings.push_back("no gaze: the pupil's ray misses the model's cornea or pupil");
     return out;
@@ -275,9 +393,10 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
 
 namespace {
 
-ModelGazeCalibration calibrate_once(const Camera& camera, const std::vector<Illuminator>& lights,
+// One calibration with the cornea's axes from `initial`'s pupil depth.
+ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illuminator>& lights,
                                     const std::vector<GazeFeatures>& frames, const std::vector<Point3>& targets,
-                                    const GazeEyeModel& initial, const Point3& start,
+                                    const GazeEyeModel& initial, const std::vector<Point3>& starts,
                                     const ModelGazeCalibrationSettings& settings) {
   const int n = settings.fit_pupil_depth ? 3 : 2;
   if (frames.size() != targets.size()) {
@@ -303,12 +422,16 @@ ModelGazeCalibration calibrate_once(const Camera& camera, const std::vector<Illu
   cornea_settings.cornea_radius_mm = initial.cornea_radius_mm;
   cornea_settings.fit_radius = settings.fit_cornea_radius;
   cornea_settings.pixel_noise_px = settings.pixel_noise_px;
-  const CorneaFit cornea =
-      fit_cornea({camera}, lights, glints, std::vector<Point3>(frames.size(), start), cornea_settings);
+  const CorneaAndAxes fitted = cornea_and_axes(camera, lights, glints, frames, initial, cornea_settings, starts);
+  const CorneaFit& cornea = fitted.cornea;
   out.warnings = cornea.warnings;
   out.cornea_centers = cornea.centers;
   if (!cornea.converged || !cornea.has_covariance()) {
     out.warnings.push_back("not calibrated: the glints do not determine the cornea");
+    return out;
+  }
+  if (!fitted.settled) {
+    out.warnings.push_back("not calibrated: the conicoid cornea's centres and the pupils' axes did not settle together");
     return out;
   }
   out.model.cornea_radius_mm = cornea.cornea_radius_mm;
@@ -423,6 +546,30 @@ ModelGazeCalibration calibrate_once(const Camera& camera, const std::vector<Illu
     out.rotation_distance_mm = x[3];
     for (int k = 0; k < 3; ++k) out.rotation_center_sd_mm[k] = std::sqrt(covariance(k, k));
   }
+  return out;
+}
+
+// A conicoid's centres depend on the axes, and so on the pupil's depth:
+// with the depth fitted, passes repeat from the last depth until it
+// settles. A sphere's take one pass.
+ModelGazeCalibration calibrate_once(const Camera& camera, const std::vector<Illuminator>& lights,
+                                    const std::vector<GazeFeatures>& frames, const std::vector<Point3>& targets,
+                                    const GazeEyeModel& initial, const Point3& start,
+                                    const ModelGazeCalibrationSettings& settings) {
+  ModelGazeCalibration out =
+      calibrate_pass(camera, lights, frames, targets, initial, std::vector<Point3>(frames.size(), start), settings);
+  if (initial.cornea_asphericity == 0 || !settings.fit_pupil_depth) return out;
+  GazeEyeModel from = initial;
+  for (int pass = 0; pass < kAxisIterations; ++pass) {
+    if (!out.converged || std::abs(out.model.pupil_depth_mm - from.pupil_depth_mm) < 1e-10) return out;
+    from.pupil_depth_mm = out.model.pupil_depth_mm;
+    from.kappa_horizontal_rad = out.model.kappa_horizontal_rad;
+    from.kappa_vertical_rad = out.model.kappa_vertical_rad;
+    out = calibrate_pass(camera, lights, frames, targets, from, out.cornea_centers, settings);
+  }
+  out.converged = false;
+  out.warnings.push_back("the calibration stopped before converging: the pupil's depth and the conicoid "
+                         "cornea's centres did not settle together");
   return out;
 }
 

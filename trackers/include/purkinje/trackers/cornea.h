@@ -1,12 +1,13 @@
 #pragma once
 // The cornea from glints (the calibration issue): the centres of a
-// spherical cornea, one per frame, and optionally its radius, that put
+// spherical or conicoid cornea, one per frame, and optionally its radius, that put
 // each light's glint where the cameras saw it. Least squares on the
 // glints' pixels through the optimizer facade, with the covariance of
 // every estimate under pixel noise and warnings where the glints do not
 // pin the answer down.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,13 @@ struct GlintObservation {
 };
 
 struct CorneaFitSettings {
-  // The tracker's eye model, a sphere: the known radius, or the fit's
-  // start when fit_radius. In (0, 100).
+  // The tracker's eye model, a sphere or a conicoid: the known (apex)
+  // radius, or the fit's start when fit_radius. In (0, 100).
   double cornea_radius_mm = 7.8;
+  // The conicoid's Q (Conicoid), > -1; 0: a sphere. A conicoid's glints
+  // depend on where its apex points: the fit then needs each frame's
+  // optical axis.
+  double cornea_asphericity = 0;
   bool fit_radius = false;
   // With fit_radius: > 0 adds a Gaussian prior on the radius at
   // cornea_radius_mm with this standard deviation; 0, none.
@@ -70,18 +75,22 @@ struct CorneaFit {
 };
 
 // Fits the centres (starting at `starts`, one per frame) and, when asked,
-// the radius. Throws std::invalid_argument naming the value for settings
-// out of range or an observation whose frame, camera or light the lists
-// do not have.
+// the radius. `optical_axes`: one per frame, held fixed, for a conicoid
+// (gaze.h estimates them from the pupil); ignored for a sphere. Throws
+// std::invalid_argument naming the value for settings out of range, an
+// observation whose frame, camera or light the lists do not have, or a
+// conicoid without its axes.
 CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
                      const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
-                     const CorneaFitSettings& settings = {});
+                     const CorneaFitSettings& settings = {},
+                     const std::vector<UnitVector3>& optical_axes = {});
 
 // One frame from one camera: a detector's glints with their light told
 // (illuminator >= 0; others are left out), `start` a guess of the centre
-// (a tracker's nominal eye).
+// (a tracker's nominal eye); the optical axis as fit_cornea's.
 CorneaFit estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
                                  const std::vector<Glint>& glints, const Point3& start,
-                                 const CorneaFitSettings& settings = {});
+                                 const CorneaFitSettings& settings = {},
+                                 const std::optional<UnitVector3>& optical_axis = std::nullopt);
 
 }  // namespace purkinje::trackers

@@ -50,10 +50,15 @@ enum class PupilFeature { outline, refracted_center, ellipse_center };
 std::optional<GazeFeatures> exact_gaze_features(const EyeInCameraTruth& view,
                                                 PupilFeature pupil = PupilFeature::outline);
 
-// The tracker's eye for the model-based method: a spherical cornea with
-// one refracting surface, the pupil's centre on the optical axis.
+// The tracker's eye for the model-based method: a spherical or conicoid
+// cornea with one refracting surface, the pupil's centre on the optical
+// axis.
 struct GazeEyeModel {
-  double cornea_radius_mm = 7.8;
+  double cornea_radius_mm = 7.8;     // at the apex for a conicoid
+  // The anterior cornea's Q (Conicoid), > -1; 0: a sphere. A conicoid's
+  // glints and refraction depend on the optical axis, which the methods
+  // then find together with the cornea's centre.
+  double cornea_asphericity = 0;
   double pupil_depth_mm = 4.2;       // from the cornea's centre to the pupil's, along the optical axis
   double refractive_index = 1.3375;  // behind the anterior cornea
   // As EyeModel: the visual axis in the eye frame of the optical axis.

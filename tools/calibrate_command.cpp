@@ -97,6 +97,14 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
   return f;
 }
 
+// The RMS of a frame's detection errors per axis; empty when there are none.
+std::string rms(const std::vector<double>& errors) {
+  if (errors.empty()) return "";
+  double sum = 0;
+  for (const double e : errors) sum += e * e;
+  return format(std::sqrt(sum / static_cast<double>(errors.size())), 6);
+}
+
 // Summaries of one method at one head position.
 struct Tally {
   std::vector<double> errors_deg;
@@ -150,9 +158,19 @@ int run_calibrate(const CalibrateRequest& request) {
   // Where the tracker expects the cornea (its nominal eye): every fit's
   // start, never the frame's truth.
   const Point3 nominal_cornea = rig.eyes.front().cornea_center();
-  // The tracker knows its rig and a nominal eye: the classic one-surface
-  // sphere, and where the rig's lights put glints on the scene's eye.
-  const trackers::GazeEyeModel nominal;
+  // The tracker knows its rig, where the rig's lights put glints on the
+  // scene's eye, and an eye model: the scene eye's anterior cornea (or the
+  // one asked for) with one refracting surface, whose index is the eye's
+  // own behind a one-surface cornea and otherwise the keratometric 1.3375,
+  // which gives the anterior radius the whole cornea's power.
+  const EyeModel& scene_eye = rig.eyes.front().model();
+  trackers::GazeEyeModel nominal;
+  nominal.cornea_radius_mm =
+      request.tracker_cornea ? (*request.tracker_cornea)[0] : scene_eye.anterior_cornea.radius_mm;
+  nominal.cornea_asphericity =
+      request.tracker_cornea ? (*request.tracker_cornea)[1] : scene_eye.anterior_cornea.asphericity;
+  nominal.refractive_index = scene_eye.posterior_cornea ? 1.3375 : scene_eye.aqueous_index;
+  nominal.pupil_depth_mm = scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm;
   const std::vector<std::optional<Pixel>> layout =
       trackers::nominal_glint_layout(camera, rig.illuminators, rig.eyes.front());
 
@@ -258,9 +276,14 @@ int run_calibrate(const CalibrateRequest& request) {
       if (request.fit_pupil_depth) r.add("pupil_depth_sd", std::sqrt(model.covariance[8]), "mm");
     }
     r.add("pupil_depth", model.model.pupil_depth_mm, "mm");
+    r.add("pupil_depth_true", scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm, "mm");
     r.add("cornea_radius", model.model.cornea_radius_mm, "mm");
     if (request.fit_radius) r.add("cornea_radius_sd", model.cornea_radius_sd_mm, "mm");
-    r.add("cornea_radius_true", rig.eyes.front().model().anterior_cornea.radius_mm, "mm");
+    r.add("cornea_radius_true", scene_eye.anterior_cornea.radius_mm, "mm");
+    r.add("cornea_asphericity", nominal.cornea_asphericity);
+    r.add("cornea_asphericity_true", scene_eye.anterior_cornea.asphericity);
+    r.add("tracker_cornea_from", request.tracker_cornea ? std::string("given") : std::string("the scene's eye"));
+    r.add("refractive_index", nominal.refractive_index);
     r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
     if (model.rotation_center) {
       r.add("rotation_center", {model.rotation_center->x, model.rotation_center->y, model.rotation_center->z}, "mm");
@@ -289,8 +312,10 @@ int run_calibrate(const CalibrateRequest& request) {
 
   // Every test frame by both methods, scored against the truth.
   std::ostringstream csv;
-  csv << "position,target_x_mm,target_y_mm,glints_told,pupil_found,cornea_lateral_error_mm,cornea_depth_error_mm,"
-         "cornea_depth_sd_mm,model_x_mm,model_y_mm,model_sd_x_mm,model_sd_y_mm,model_error_deg,polynomial_x_mm,"
+  csv << "position,target_x_mm,target_y_mm,glints_told,pupil_found,glint_error_rms_px,pupil_error_rms_px,"
+         "cornea_lateral_error_mm,cornea_depth_error_mm,"
+         "cornea_depth_sd_mm,cornea_across_x_error_mm,cornea_across_y_error_mm,cornea_across_x_sd_mm,"
+         "cornea_across_y_sd_mm,model_x_mm,model_y_mm,model_sd_x_mm,model_sd_y_mm,model_error_deg,polynomial_x_mm,"
          "polynomial_y_mm,polynomial_error_deg\n";
   std::vector<trackers::GazeMapPanel> panels;
   try {
@@ -307,7 +332,7 @@ int run_calibrate(const CalibrateRequest& request) {
           return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
         };
         csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
-            << (f.found ? 1 : 0);
+            << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
         std::optional<ScreenPoint> by_model, by_polynomial;
         if (f.found) {
           const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
@@ -332,9 +357,11 @@ int run_calibrate(const CalibrateRequest& request) {
           const double across = (e - along * sight).norm();
           const double depth_var = variance_along(sight);
           if (g.cornea_determined) {
-            csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var);
+            csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var) << ',' << dot(e, across_x) << ','
+                << dot(e, across_y) << ',' << std::sqrt(variance_along(across_x)) << ','
+                << std::sqrt(variance_along(across_y));
           } else {
-            csv << ",,,";
+            csv << ",,,,,,,";
           }
           if (g.cornea_determined) {
             lateral.push_back(across);
@@ -368,7 +395,7 @@ int run_calibrate(const CalibrateRequest& request) {
           by_polynomial = polynomial->estimate(*f.found);
         } else {
           ++model_tally.missing;
-          csv << ",,,,,,,,";
+          csv << ",,,,,,,,,,,,";
         }
         if (by_polynomial) {
           polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));

@@ -36,6 +36,9 @@ struct CalibrateRequest {
   int grid = 8;              // test targets: grid x grid over the screen, at each head position
   int calibration_grid = 3;  // calibration targets, at the scene's eye position
   std::vector<std::array<double, 3>> head_moves;  // mm, test positions beside the scene's
+  // The tracker's anterior cornea: apex radius (mm) and asphericity Q;
+  // absent: the scene eye's.
+  std::optional<std::array<double, 2>> tracker_cornea;
   bool fit_radius = false;
   bool fit_pupil_depth = false;
   // The detectors' noise (s.d., px) the reported uncertainties assume;

@@ -368,6 +368,7 @@ int run(int argc, char** argv) {
 
   purkinje::tools::CalibrateRequest calibrate_request;
   std::vector<std::string> head_moves;
+  std::string tracker_cornea;
   CLI::App* calibrate = app.add_subcommand(
       "calibrate", "Render the eye fixating targets on the scene's screen, detect, calibrate gaze, score");
   calibrate->footer(std::string("The scene needs a \"screen\" (docs/scene-format.md). Its eye fixates a\n"
@@ -390,6 +391,9 @@ int run(int argc, char** argv) {
   calibrate->add_option("--head-move", head_moves,
                         "A test position beside the scene's, as the eye's move \"x,y,z\" in mm (repeatable),\n"
                         "e.g. --head-move 100,0,0 --head-move 0,0,100");
+  calibrate->add_option("--tracker-cornea", tracker_cornea,
+                        "The tracker's cornea as \"R,Q\": apex radius (mm) and asphericity, e.g. 7.8,0 for\n"
+                        "the classic sphere (default: the scene eye's own, the correct model)");
   calibrate->add_flag("--fit-radius", calibrate_request.fit_radius,
                       "Fit the cornea's radius from all calibration frames' glints");
   calibrate->add_flag("--fit-pupil-depth", calibrate_request.fit_pupil_depth,
@@ -425,6 +429,18 @@ int run(int argc, char** argv) {
         return kUsageError;
       }
       calibrate_request.head_moves.push_back(m);
+    }
+    if (!tracker_cornea.empty()) {
+      std::array<double, 2> c{};
+      char comma = 0;
+      std::istringstream in(tracker_cornea);
+      if (!(in >> c[0] >> comma >> c[1]) || comma != ',' || !in.eof() || !(c[0] > 0 && c[0] < 100) ||
+          !(c[1] > -1 && c[1] < 10)) {
+        std::cerr << "purkinje calibrate: --tracker-cornea \"" << tracker_cornea
+                  << "\": must be \"R,Q\" with the apex radius R in (0, 100) mm and the asphericity Q in (-1, 10)\n";
+        return kUsageError;
+      }
+      calibrate_request.tracker_cornea = c;
     }
     return purkinje::tools::run_calibrate(calibrate_request);
   }

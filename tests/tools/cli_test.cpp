@@ -452,6 +452,7 @@ TEST_F(Cli, CalibrateWritesItsTableFramesAndGazeMap) {
   EXPECT_EQ(calibration["case"], "calibration");
   EXPECT_EQ(calibration["results"]["frames_used"], 9);
   EXPECT_NEAR(calibration["results"]["cornea_radius"].get<double>(), 7.8, 0.2);  // the scene's
+  EXPECT_EQ(calibration["results"]["tracker_cornea_from"], "the scene's eye");
   // The detectors' noise, measured against the labels: some hundredths of a pixel.
   EXPECT_EQ(calibration["results"]["glint_noise_from"], "measured");
   EXPECT_GT(calibration["results"]["glint_noise"].get<double>(), 0.005);
@@ -483,5 +484,8 @@ TEST_F(Cli, CalibrateRefusesASceneWithoutAScreenAndBadHeadMoves) {
   EXPECT_NE(err().find("--head-move \"100,0\""), std::string::npos) << err();
   EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --grid 0"), 2);
   EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --glint-noise 0"), 2);
+  EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --tracker-cornea 7.8,-1"), 2);
+  EXPECT_NE(err().find("--tracker-cornea \"7.8,-1\""), std::string::npos) << err();
+  EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --tracker-cornea 7.8"), 2);
   EXPECT_TRUE(output_dir_entries().empty());
 }

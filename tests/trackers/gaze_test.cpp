@@ -275,6 +275,35 @@ TEST(ModelGaze, AConicoidCorneaModelledGivesExactCentresAndGaze) {
   }
 }
 
+// Navarro's eye, as the remote scene's: two aspheric corneal surfaces.
+// The tracker's one-surface conicoid with the keratometric index (which
+// gives the anterior radius the whole cornea's power) stands for it
+// within a hundredth of a degree, its pupil's depth fitted.
+TEST(ModelGaze, NavarrosTwoSurfaceEyeThroughTheOneSurfaceConicoid) {
+  EyeModel navarro = navarro_eye();
+  const GazeRig s(navarro);
+  GazeEyeModel start = s.tracker_eye();
+  start.refractive_index = 1.3375;
+  std::vector<GazeFeatures> frames;
+  std::vector<Point3> targets;
+  for (const ScreenPoint& target : s.screen.grid(3, 3)) {
+    frames.push_back(*exact_gaze_features(s.view(s.home, target)));
+    targets.push_back(s.screen.at(target));
+  }
+  ModelGazeCalibrationSettings settings;
+  settings.fit_pupil_depth = true;
+  const ModelGazeCalibration c =
+      calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, frames, targets, start, s.home, settings);
+  ASSERT_TRUE(c.converged);
+  EXPECT_NEAR(c.model.pupil_depth_mm, 7.72 - 3.6, 0.01);
+  for (const auto& [name, move] : kHeadMoves) {
+    const Errors e = model_errors(s, c.model, s.home + move, PupilFeature::outline, 4);
+    EXPECT_EQ(e.missing, 0) << name;
+    EXPECT_LT(e.max_deg, 0.01) << name;
+    record("navarro_" + name, e);
+  }
+}
+
 // The same eye through a sphere of its apex radius: the cornea's centre
 // is off by millimetres in depth, and differently for each target.
 TEST(ModelGaze, ASphereForAConicoidCorneaMisplacesItsCentreInDepth) {

@@ -119,6 +119,30 @@ BENCHMARK(BM_CorneaCenterHeadset)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CorneaCenterHeadsetNoisy)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CorneaCenterRemoteNoisy)->Unit(benchmark::kMicrosecond);
 
+// The remote's own aspheric cornea (Navarro's, Q = -0.26) with its
+// optical axis given, as gaze's alternation calls it: 0.1 px noise.
+void BM_CorneaCenterRemoteConicoidNoisy(benchmark::State& state) {
+  const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote.json");
+  const std::vector<Glint> exact = exact_detections(compute_truth(scene).views).glints;
+  std::mt19937 random(7);
+  std::normal_distribution<double> noise(0, 0.1);
+  std::vector<std::vector<Glint>> draws(64, exact);
+  for (std::vector<Glint>& glints : draws) {
+    for (Glint& g : glints) g.centre = {g.centre.u + noise(random), g.centre.v + noise(random)};
+  }
+  CorneaFitSettings conicoid;
+  conicoid.cornea_radius_mm = 7.72;
+  conicoid.cornea_asphericity = -0.26;
+  const Point3 start = scene.eyes[0].cornea_center() + Vector3{2, -1.5, 3};
+  const UnitVector3 axis = scene.eyes[0].optical_axis();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(estimate_cornea_center(scene.cameras[0], scene.illuminators, draws[i++ % draws.size()],
+                                                    start, conicoid, axis));
+  }
+}
+BENCHMARK(BM_CorneaCenterRemoteConicoidNoisy)->Unit(benchmark::kMicrosecond);
+
 // A 9-point gaze calibration (the calibration issue's bar: at most 10
 // ms): the bundled remote rig and screen, a one-surface spherical eye with
 // kappa fixating a 3 x 3 grid, exact features (the pupil's outline, 36
@@ -132,9 +156,10 @@ struct NineFrames {
   std::vector<ScreenPoint> on_screen = rig.screen->grid(3, 3);
 };
 
-NineFrames nine_frames() {
+NineFrames nine_frames(const Conicoid& cornea = {7.8, 0}) {
   NineFrames n;
   EyeModel eye = keratometric_eye();
+  eye.anterior_cornea = cornea;
   eye.kappa_horizontal_rad = 0.087;
   eye.kappa_vertical_rad = 0.026;
   std::mt19937 random(3);
@@ -163,6 +188,21 @@ void BM_GazeCalibrationModelBased(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_GazeCalibrationModelBased)->Unit(benchmark::kMillisecond);
+
+// The same with a conicoid cornea (Q = -0.26) in eye and model: each
+// frame's cornea and pupil axis alternate until they settle.
+void BM_GazeCalibrationModelBasedConicoid(benchmark::State& state) {
+  const NineFrames n = nine_frames({7.72, -0.26});
+  GazeEyeModel model;
+  model.cornea_radius_mm = 7.72;
+  model.cornea_asphericity = -0.26;
+  model.pupil_depth_mm = 7.72 - 3.6;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(calibrate_model_gaze(n.rig.cameras[0], n.rig.illuminators, n.frames, n.targets, model,
+                                                  n.rig.eyes[0].rotation_center()));
+  }
+}
+BENCHMARK(BM_GazeCalibrationModelBasedConicoid)->Unit(benchmark::kMillisecond);
 
 void BM_GazeCalibrationPolynomial(benchmark::State& state) {
   const NineFrames n = nine_frames();

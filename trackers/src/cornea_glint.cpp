@@ -151,6 +151,20 @@ struct ConicoidReflection {
   }
 };
 
+// The glint at P with normal n as the camera images it (with
+// d(pixel)/dP when asked); nullopt behind the camera.
+std::optional<CorneaGlint> imaged(const Camera& camera, const Vec3& p, const Vec3& n, bool with_derivatives,
+                                  std::array<double, 6>& d_pixel_d_point) {
+  CorneaGlint out;
+  out.point = {p.x(), p.y(), p.z()};
+  out.normal = UnitVector3::from_normalized_unchecked({n.x(), n.y(), n.z()});
+  const Projection projection =
+      with_derivatives ? camera.project(out.point, d_pixel_d_point) : camera.project(out.point);
+  if (projection.status == ProjectionStatus::behind_camera) return std::nullopt;
+  out.pixel = projection.pixel;
+  return out;
+}
+
 }  // namespace
 
 std::optional<CorneaGlint> sphere_glint(const Camera& camera, const Point3& center, double radius_mm,
@@ -166,15 +180,9 @@ std::optional<CorneaGlint> sphere_glint(const Camera& camera, const Point3& cent
   // Past grazing, the point cannot see the light or the camera.
   if (!(to_light.dot(n) > 0) || !(to_camera.dot(n) > 0)) return std::nullopt;
 
-  CorneaGlint out;
-  out.point = {p.x(), p.y(), p.z()};
-  out.normal = UnitVector3::from_normalized_unchecked({n.x(), n.y(), n.z()});
   std::array<double, 6> d_pixel_d_point{};
-  const Projection projection =
-      with_derivatives ? camera.project(out.point, d_pixel_d_point) : camera.project(out.point);
-  if (projection.status == ProjectionStatus::behind_camera) return std::nullopt;
-  out.pixel = projection.pixel;
-  if (!with_derivatives) return out;
+  std::optional<CorneaGlint> out = imaged(camera, p, n, with_derivatives, d_pixel_d_point);
+  if (!out || !with_derivatives) return out;
 
   // The implicit function theorem on the law of reflection, m = |m| n
   // with m the sum of the unit directions from P to the light and to the
@@ -204,7 +212,7 @@ std::optional<CorneaGlint> sphere_glint(const Camera& camera, const Point3& cent
   const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
   const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
   for (int row = 0; row < 2; ++row) {
-    for (int k = 0; k < 4; ++k) out.d_pixel[4 * row + k] = chained(row, k);
+    for (int k = 0; k < 4; ++k) out->d_pixel[4 * row + k] = chained(row, k);
   }
   return out;
 }
@@ -242,15 +250,9 @@ std::optional<CorneaGlint> conicoid_glint(const Camera& camera, const Point3& ce
   if (!(e.z > radius - radius / (1 + q))) return std::nullopt;
   if (!((law.l - p).dot(e.n) > 0) || !((law.o - p).dot(e.n) > 0)) return std::nullopt;
 
-  CorneaGlint out;
-  out.point = {p.x(), p.y(), p.z()};
-  out.normal = UnitVector3::from_normalized_unchecked({e.n.x(), e.n.y(), e.n.z()});
   std::array<double, 6> d_pixel_d_point{};
-  const Projection projection =
-      with_derivatives ? camera.project(out.point, d_pixel_d_point) : camera.project(out.point);
-  if (projection.status == ProjectionStatus::behind_camera) return std::nullopt;
-  out.pixel = projection.pixel;
-  if (!with_derivatives) return out;
+  std::optional<CorneaGlint> out = imaged(camera, p, e.n, with_derivatives, d_pixel_d_point);
+  if (!out || !with_derivatives) return out;
 
   // The implicit function theorem on the same equations: dP/d(C, R) =
   // -(dE/dP)^-1 dE/d(C, R). F depends on C through s (dF/dC = -g) and on
@@ -264,7 +266,7 @@ std::optional<CorneaGlint> conicoid_glint(const Camera& camera, const Point3& ce
   const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
   const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
   for (int row = 0; row < 2; ++row) {
-    for (int k = 0; k < 4; ++k) out.d_pixel[4 * row + k] = chained(row, k);
+    for (int k = 0; k < 4; ++k) out->d_pixel[4 * row + k] = chained(row, k);
   }
   return out;
 }

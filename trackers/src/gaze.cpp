@@ -310,15 +310,19 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
     out.warnings.push_back("no gaze: the cornea's centre is not determined by the glints");
     return out;
   }
-  if (!fitted.settled) {
-    out.warnings.push_back("no gaze: the conicoid cornea's centre and the pupil's axis did not settle together");
-    return out;
+  // A sphere's centre stands without the pupil; a conicoid's only once
+  // it has settled with the pupil's axis.
+  if (fitted.settled) {
+    out.cornea_determined = true;
+    out.cornea_covariance_mm2 = cornea.center_covariance(0);
   }
-  out.cornea_determined = true;
-  out.cornea_covariance_mm2 = cornea.center_covariance(0);
   const std::optional<OpticalAxis>& axis = fitted.axes.front();
   if (!axis) {
     out.warnings.push_back("no gaze: the pupil's ray misses the model's cornea or pupil");
+    return out;
+  }
+  if (!fitted.settled) {
+    out.warnings.push_back("no gaze: the conicoid cornea's centre and the pupil's axis did not settle together");
     return out;
   }
   out.pupil_center = axis->pupil_center;
@@ -431,7 +435,11 @@ ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illu
     return out;
   }
   if (!fitted.settled) {
-    out.warnings.push_back("not calibrated: the conicoid cornea's centres and the pupils' axes did not settle together");
+    const bool missed = std::any_of(fitted.axes.begin(), fitted.axes.end(),
+                                    [](const std::optional<OpticalAxis>& a) { return !a; });
+    out.warnings.push_back(missed ? "not calibrated: a pupil's ray misses the model's cornea or pupil"
+                                  : "not calibrated: the conicoid cornea's centres and the pupils' axes did not "
+                                    "settle together");
     return out;
   }
   out.model.cornea_radius_mm = cornea.cornea_radius_mm;

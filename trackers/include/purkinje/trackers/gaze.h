@@ -79,7 +79,9 @@ struct FeatureNoise {
 
 struct ModelGaze {
   Point3 cornea_center;
-  bool cornea_determined = false;  // false: cornea_center is the fit's start, not an estimate
+  // false: cornea_center is no estimate to use (the fit's start, or a
+  // conicoid's centre that did not settle with the pupil's axis)
+  bool cornea_determined = false;
   // Row-major, mm^2, of the cornea's centre from the glints' noise.
   std::array<double, 9> cornea_covariance_mm2{};
   Point3 pupil_center;

@@ -148,6 +148,12 @@ int run_calibrate(const CalibrateRequest& request) {
       throw std::runtime_error(request.scene_file + ": " + std::to_string(rig.eyes.size()) +
                                " eyes: calibration follows one eye");
     }
+    const double q = rig.eyes.front().model().anterior_cornea.asphericity;
+    if (!request.tracker_cornea && !(q > -1 && q < 10)) {
+      throw std::runtime_error(request.scene_file + ": the eye's anterior_cornea asphericity " + format(q) +
+                               ": the tracker's cornea must be an ellipsoid, Q in (-1, 10); give another "
+                               "with --tracker-cornea R,Q");
+    }
   } catch (const std::exception& error) {
     std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
     return kBadInput;

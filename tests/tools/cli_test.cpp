@@ -487,5 +487,14 @@ TEST_F(Cli, CalibrateRefusesASceneWithoutAScreenAndBadHeadMoves) {
   EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --tracker-cornea 7.8,-1"), 2);
   EXPECT_NE(err().find("--tracker-cornea \"7.8,-1\""), std::string::npos) << err();
   EXPECT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --tracker-cornea 7.8"), 2);
+  // A paraboloid cornea in the scene: no ellipsoid for the tracker, said before any rendering.
+  const fs::path paraboloid = root_ / "paraboloid.json";
+  std::string text = read(kSourceDir / "assets/scenes/remote.json");
+  const std::string model = "\"model\": \"navarro\",";
+  ASSERT_NE(text.find(model), std::string::npos);
+  text.replace(text.find(model), model.size(), model + " \"cornea\": { \"asphericity\": -1 },");
+  std::ofstream(paraboloid) << text;
+  EXPECT_EQ(run("calibrate " + quoted(paraboloid.string()) + " -o " + quoted(output_dir_.string())), 1);
+  EXPECT_NE(err().find("asphericity -1"), std::string::npos) << err();
   EXPECT_TRUE(output_dir_entries().empty());
 }

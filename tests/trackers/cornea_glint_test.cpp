@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -97,31 +98,48 @@ TEST(SphereGlint, AgreesWithTheSpecularSolverFromNearToGrazing) {
   EXPECT_GE(checked, 24);
 }
 
-TEST(SphereGlint, DerivativesMatchCentralDifferences) {
+// A turned, distorting camera near an eye, for the derivatives' checks.
+Camera distorting_camera() {
   const Distortion lens{.k1 = -0.1, .k2 = 0.02, .p1 = 0.001, .p2 = 0, .k3 = 0};
-  Camera camera("c", Intrinsics::from_focal_length(8, 0.003, 640, 480), lens,
+  return Camera("c", Intrinsics::from_focal_length(8, 0.003, 640, 480), lens,
                 camera_looking_at({0, 20, 0}, {2, 0, 35}, {0, -1, 0}));
-  const Point3 center{2, 1, 36};
-  const Point3 light{-18, -12, 4};
-  const std::optional<CorneaGlint> g = sphere_glint(camera, center, 7.6, light);
-  ASSERT_TRUE(g);
+}
+
+// A glint's d(pixel)/d(centre, radius) against central differences of
+// `glint_at(centre, radius)`; returns the glint at (center, radius).
+std::optional<CorneaGlint> expect_derivatives_match_central_differences(
+    const std::function<std::optional<CorneaGlint>(const Point3&, double)>& glint_at, const Point3& center,
+    double radius) {
+  const std::optional<CorneaGlint> g = glint_at(center, radius);
+  EXPECT_TRUE(g);
+  if (!g) return g;
   constexpr double h = 1e-5;
   for (int k = 0; k < 4; ++k) {
     Point3 cp = center, cm = center;
-    double rp = 7.6, rm = 7.6;
+    double rp = radius, rm = radius;
     if (k == 3) {
       rp += h, rm -= h;
     } else {
       (k == 0 ? cp.x : k == 1 ? cp.y : cp.z) += h;
       (k == 0 ? cm.x : k == 1 ? cm.y : cm.z) -= h;
     }
-    const std::optional<CorneaGlint> p = sphere_glint(camera, cp, rp, light);
-    const std::optional<CorneaGlint> m = sphere_glint(camera, cm, rm, light);
-    ASSERT_TRUE(p && m);
+    const std::optional<CorneaGlint> p = glint_at(cp, rp);
+    const std::optional<CorneaGlint> m = glint_at(cm, rm);
+    EXPECT_TRUE(p && m);
+    if (!p || !m) return g;
     EXPECT_NEAR(g->d_pixel[k], (p->pixel.u - m->pixel.u) / (2 * h), 1e-5 * std::abs(g->d_pixel[k]) + 1e-6) << k;
     EXPECT_NEAR(g->d_pixel[4 + k], (p->pixel.v - m->pixel.v) / (2 * h), 1e-5 * std::abs(g->d_pixel[4 + k]) + 1e-6)
         << k;
   }
+  return g;
+}
+
+TEST(SphereGlint, DerivativesMatchCentralDifferences) {
+  const Camera camera = distorting_camera();
+  const Point3 light{-18, -12, 4};
+  const std::optional<CorneaGlint> g = expect_derivatives_match_central_differences(
+      [&](const Point3& c, double r) { return sphere_glint(camera, c, r, light); }, {2, 1, 36}, 7.6);
+  ASSERT_TRUE(g);
   // A sphere moved along the line of sight changes its glint's pixel little;
   // one moved sideways drags it along: the derivatives must show that.
   EXPECT_GT(std::abs(g->d_pixel[0]), 10.0);
@@ -208,32 +226,14 @@ TEST(ConicoidGlint, OnTheAxisItIsTheApex) {
 }
 
 TEST(ConicoidGlint, DerivativesMatchCentralDifferences) {
-  const Distortion lens{.k1 = -0.1, .k2 = 0.02, .p1 = 0.001, .p2 = 0, .k3 = 0};
-  Camera camera("c", Intrinsics::from_focal_length(8, 0.003, 640, 480), lens,
-                camera_looking_at({0, 20, 0}, {2, 0, 35}, {0, -1, 0}));
-  const Point3 center{2, 1, 36};
+  const Camera camera = distorting_camera();
   const Point3 light{-18, -12, 4};
   // Turned 20 deg away from the camera, so that the glint is far from the apex.
   const UnitVector3 axis = UnitVector3::normalize(Vector3{0.35, -0.6, -1});
-  const std::optional<CorneaGlint> g = conicoid_glint(camera, center, axis, Conicoid{7.6, -0.3}, light);
+  const std::optional<CorneaGlint> g = expect_derivatives_match_central_differences(
+      [&](const Point3& c, double r) { return conicoid_glint(camera, c, axis, Conicoid{r, -0.3}, light); },
+      {2, 1, 36}, 7.6);
   ASSERT_TRUE(g);
-  constexpr double h = 1e-5;
-  for (int k = 0; k < 4; ++k) {
-    Point3 cp = center, cm = center;
-    double rp = 7.6, rm = 7.6;
-    if (k == 3) {
-      rp += h, rm -= h;
-    } else {
-      (k == 0 ? cp.x : k == 1 ? cp.y : cp.z) += h;
-      (k == 0 ? cm.x : k == 1 ? cm.y : cm.z) -= h;
-    }
-    const std::optional<CorneaGlint> p = conicoid_glint(camera, cp, axis, Conicoid{rp, -0.3}, light);
-    const std::optional<CorneaGlint> m = conicoid_glint(camera, cm, axis, Conicoid{rm, -0.3}, light);
-    ASSERT_TRUE(p && m);
-    EXPECT_NEAR(g->d_pixel[k], (p->pixel.u - m->pixel.u) / (2 * h), 1e-5 * std::abs(g->d_pixel[k]) + 1e-6) << k;
-    EXPECT_NEAR(g->d_pixel[4 + k], (p->pixel.v - m->pixel.v) / (2 * h), 1e-5 * std::abs(g->d_pixel[4 + k]) + 1e-6)
-        << k;
-  }
   // The apex radius moves the glint: the derivative the radius's fit needs.
   EXPECT_GT(std::abs(g->d_pixel[3]), 1.0);
 }

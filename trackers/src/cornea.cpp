@@ -218,12 +218,11 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     for (std::size_t i = 0; i < glints.size(); ++i) {
       const GlintObservation& o = glints[i];
       const double* c = x + 3 * o.frame;
+      // A sphere's glint needs no axis (conicoid_glint takes it to sphere_glint).
       const std::optional<CorneaGlint> g =
-          sphere ? sphere_glint(cameras[o.camera], {c[0], c[1], c[2]}, radius, lights[o.light].position, warm[i],
-                                jacobian != nullptr)
-                 : conicoid_glint(cameras[o.camera], {c[0], c[1], c[2]}, axes[o.frame],
-                                  Conicoid{radius, s.cornea_asphericity}, lights[o.light].position, warm[i],
-                                  jacobian != nullptr);
+          conicoid_glint(cameras[o.camera], {c[0], c[1], c[2]}, sphere ? UnitVector3::unit_z() : axes[o.frame],
+                         Conicoid{radius, s.cornea_asphericity}, lights[o.light].position, warm[i],
+                         jacobian != nullptr);
       if (!g) return false;
       warm[i] = g->normal;
       r[2 * i] = g->pixel.u - o.pixel.u;
@@ -382,14 +381,18 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
   }
 }
 
+void add_observations(std::vector<GlintObservation>& out, const std::vector<Glint>& glints, int frame,
+                      int camera) {
+  for (const Glint& g : glints) {
+    if (g.illuminator >= 0) out.push_back({frame, camera, g.illuminator, g.centre});
+  }
+}
+
 CorneaFit estimate_cornea_center(const Camera& camera, const std::vector<Illuminator>& lights,
                                  const std::vector<Glint>& glints, const Point3& start,
                                  const CorneaFitSettings& settings, const std::optional<UnitVector3>& optical_axis) {
   std::vector<GlintObservation> observed;
-  observed.reserve(glints.size());
-  for (const Glint& g : glints) {
-    if (g.illuminator >= 0) observed.push_back({0, 0, g.illuminator, g.centre});
-  }
+  add_observations(observed, glints, 0);
   std::vector<UnitVector3> axes;
   if (optical_axis) axes.push_back(*optical_axis);
   return fit_cornea({camera}, lights, observed, {start}, settings, axes);

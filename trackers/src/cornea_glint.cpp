@@ -97,6 +97,45 @@ bool glint_normal(const Vec3& c, double radius, const Vec3& l, const Vec3& o,
   return true;
 }
 
+// Two unit vectors across n, as the rows of a 2 x 3 matrix.
+Eigen::Matrix<double, 2, 3> tangent_basis(const Vec3& n) {
+  Vec3 axis = Vec3::Zero();
+  int least = 0;
+  n.cwiseAbs().minCoeff(&least);
+  axis[least] = 1;
+  Eigen::Matrix<double, 2, 3> t;
+  t.row(0) = n.cross(axis).normalized().transpose();
+  t.row(1) = n.cross(t.row(0).transpose()).transpose();
+  return t;
+}
+
+// The unit directions from P to the light and to the camera, and
+// A = (I - l l^T) / |L - P| + (I - o o^T) / |O - P|, minus the derivative
+// of their sum by P: what both laws of reflection below differentiate.
+struct Directions {
+  Vec3 to_light, to_camera;
+  Eigen::Matrix3d spread;
+};
+
+Directions directions_from(const Vec3& p, const Vec3& l, const Vec3& o) {
+  const Vec3 to_light = l - p, to_camera = o - p;
+  const double dl = to_light.norm(), dc = to_camera.norm();
+  Directions d{to_light / dl, to_camera / dc, Eigen::Matrix3d::Identity()};
+  d.spread = (Eigen::Matrix3d::Identity() - d.to_light * d.to_light.transpose()) / dl +
+             (Eigen::Matrix3d::Identity() - d.to_camera * d.to_camera.transpose()) / dc;
+  return d;
+}
+
+// d(pixel)/d(centre, radius) from d(pixel)/dP and dP/d(centre, radius).
+void chain(const std::array<double, 6>& d_pixel_d_point, const Eigen::Matrix<double, 3, 4>& d_point,
+           CorneaGlint& out) {
+  const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
+  const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
+  for (int row = 0; row < 2; ++row) {
+    for (int k = 0; k < 4; ++k) out.d_pixel[4 * row + k] = chained(row, k);
+  }
+}
+
 // The law of reflection on a conicoid, in world terms. With s = P - C and
 // z = a.s along the axis a, the surface x^2 + y^2 + (1 + Q) w^2 - 2 R w = 0
 // (w = R - z from the apex) is
@@ -127,24 +166,16 @@ struct ConicoidReflection {
     e.g_norm = g.norm();
     e.n = g / e.g_norm;
     const double f = s.squaredNorm() - z * z + (1 + q) * (radius - z) * (radius - z) - 2 * radius * (radius - z);
-    const Vec3 to_light = l - p, to_camera = o - p;
-    const double dl = to_light.norm(), dc = to_camera.norm();
-    const Vec3 lu = to_light / dl, cu = to_camera / dc;
-    const Vec3 h = lu + cu;
+    const Directions d = directions_from(p, l, o);
+    const Vec3 h = d.to_light + d.to_camera;
     const double h_norm = h.norm();
     const Vec3 hu = h / h_norm;
-    Vec3 axis = Vec3::Zero();
-    int least = 0;
-    e.n.cwiseAbs().minCoeff(&least);
-    axis[least] = 1;
-    e.tangent.row(0) = e.n.cross(axis).normalized().transpose();
-    e.tangent.row(1) = e.n.cross(e.tangent.row(0).transpose()).transpose();
+    e.tangent = tangent_basis(e.n);
     const Eigen::Matrix3d i3 = Eigen::Matrix3d::Identity();
-    const Eigen::Matrix3d d_direction = (i3 - lu * lu.transpose()) / dl + (i3 - cu * cu.transpose()) / dc;
     // dF/dP / |g| = n where F = 0; the tangent basis is held fixed, which
     // costs nothing at the answer, where hu - n = 0.
     e.jacobian.row(0) = e.n.transpose();
-    e.jacobian.bottomRows<2>() = e.tangent * (-(i3 - hu * hu.transpose()) * d_direction / h_norm -
+    e.jacobian.bottomRows<2>() = e.tangent * (-(i3 - hu * hu.transpose()) * d.spread / h_norm -
                                               (i3 - e.n * e.n.transpose()) * hessian / e.g_norm);
     e.residual = {f / e.g_norm, e.tangent.row(0).dot(hu - e.n), e.tangent.row(1).dot(hu - e.n)};
     return e;
@@ -190,30 +221,17 @@ std::optional<CorneaGlint> sphere_glint(const Camera& camera, const Point3& cent
   // (I - o o^T) / |O - P|, dP = dC + n dR + R dn and dn = U y in the
   // tangent plane (U = [u v]):
   //   (|m| I + R U^T A U) y = -U^T A (dC + n dR).
-  const double dl = to_light.norm(), dc = to_camera.norm();
-  const Vec3 lu = to_light / dl, cu = to_camera / dc;
-  const Eigen::Matrix3d a = (Eigen::Matrix3d::Identity() - lu * lu.transpose()) / dl +
-                            (Eigen::Matrix3d::Identity() - cu * cu.transpose()) / dc;
-  const double m = (lu + cu).norm();
-  Vec3 axis = Vec3::Zero();
-  int least = 0;
-  n.cwiseAbs().minCoeff(&least);
-  axis[least] = 1;
-  Eigen::Matrix<double, 3, 2> u;
-  u.col(0) = n.cross(axis).normalized();
-  u.col(1) = n.cross(u.col(0));
-  const Eigen::Matrix<double, 2, 3> ua = u.transpose() * a;
+  const Directions d = directions_from(p, l, o);
+  const double m = (d.to_light + d.to_camera).norm();
+  const Eigen::Matrix<double, 3, 2> u = tangent_basis(n).transpose();
+  const Eigen::Matrix<double, 2, 3> ua = u.transpose() * d.spread;
   const Eigen::Matrix2d system = m * Eigen::Matrix2d::Identity() + radius_mm * ua * u;
   const Eigen::Matrix2d inverse = system.inverse();
   // dP/d(C, R), 3 x 4: I + R dn/dC, and n + R dn/dR.
   Eigen::Matrix<double, 3, 4> d_point;
   d_point.leftCols<3>() = Eigen::Matrix3d::Identity() - radius_mm * u * inverse * ua;
   d_point.col(3) = n - radius_mm * u * (inverse * (ua * n));
-  const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
-  const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
-  for (int row = 0; row < 2; ++row) {
-    for (int k = 0; k < 4; ++k) out->d_pixel[4 * row + k] = chained(row, k);
-  }
+  chain(d_pixel_d_point, d_point, *out);
   return out;
 }
 
@@ -262,12 +280,7 @@ std::optional<CorneaGlint> conicoid_glint(const Camera& camera, const Point3& ce
   d_equations(0, 3) = (2 * q * (radius - e.z) - 2 * radius) / e.g_norm;
   d_equations.block<2, 3>(1, 0) = e.tangent * law.hessian / e.g_norm;
   d_equations.block<2, 1>(1, 3) = e.tangent * (2 * q * a) / e.g_norm;
-  const Eigen::Matrix<double, 3, 4> d_point = -e.jacobian.partialPivLu().solve(d_equations);
-  const Eigen::Map<const Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> d_pixel(d_pixel_d_point.data());
-  const Eigen::Matrix<double, 2, 4> chained = d_pixel * d_point;
-  for (int row = 0; row < 2; ++row) {
-    for (int k = 0; k < 4; ++k) out->d_pixel[4 * row + k] = chained(row, k);
-  }
+  chain(d_pixel_d_point, -e.jacobian.partialPivLu().solve(d_equations), *out);
   return out;
 }
 

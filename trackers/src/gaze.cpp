@@ -308,9 +308,7 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
   settings.pixel_noise_px = glint_noise_px;
   settings.reject_beyond_sd = reject_beyond_sd;
   std::vector<GlintObservation> glints;
-  for (const Glint& g : features.glints) {
-    if (g.illuminator >= 0) glints.push_back({0, 0, g.illuminator, g.centre});
-  }
+  add_observations(glints, features.glints, 0);
   const CorneaAndAxes fitted = cornea_and_axes(camera, lights, glints, {features}, model, settings, {start});
   const CorneaFit& cornea = fitted.cornea;
   out.warnings = cornea.warnings;
@@ -424,14 +422,10 @@ ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illu
   ModelGazeCalibration out;
   out.model = initial;
 
-  // The cornea first, from the glints alone: its centres do not depend on
-  // kappa or the pupil's depth.
+  // The cornea first, from the glints (a conicoid's with the pupils' axes,
+  // which the pupil's depth moves): its centres do not depend on kappa.
   std::vector<GlintObservation> glints;
-  for (std::size_t f = 0; f < frames.size(); ++f) {
-    for (const Glint& g : frames[f].glints) {
-      if (g.illuminator >= 0) glints.push_back({static_cast<int>(f), 0, g.illuminator, g.centre});
-    }
-  }
+  for (std::size_t f = 0; f < frames.size(); ++f) add_observations(glints, frames[f].glints, static_cast<int>(f));
   CorneaFitSettings cornea_settings;
   cornea_settings.cornea_radius_mm = initial.cornea_radius_mm;
   cornea_settings.fit_radius = settings.fit_cornea_radius;

@@ -85,6 +85,11 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
                      const CorneaFitSettings& settings = {},
                      const std::vector<UnitVector3>& optical_axes = {});
 
+// A detector's glints in one frame of one camera, those with their light
+// told (illuminator >= 0), appended to `out` as observations.
+void add_observations(std::vector<GlintObservation>& out, const std::vector<Glint>& glints, int frame,
+                      int camera = 0);
+
 // One frame from one camera: a detector's glints with their light told
 // (illuminator >= 0; others are left out), `start` a guess of the centre
 // (a tracker's nominal eye); the optical axis as fit_cornea's.

@@ -1,7 +1,7 @@
 // The blob glint detector on the renderer's noisy sensor images, against
 // the labels: every visible glint found and told which light made it,
 // within 0.1 px of its label on average, and nothing else found (measured
-// over 4 noise seeds: remote 0.039 px, headset 0.031 px, worst 0.14 px).
+// over 4 noise seeds: remote 0.0063 px, headset 0.014 px, worst 0.054 px).
 // The trackers issue's bar, over 500 renders with varied gaze and pupil,
 // is for `purkinje track`; this is its everyday check.
 

@@ -8,6 +8,7 @@
 #include <complex>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -27,6 +28,7 @@ struct SpotPixel {
   int u, v;
   double value;
   bool at_least;
+  double weight;  // 1 / the value's standard deviation
 };
 
 // The share of a Gaussian (centre c, width sigma) along one axis that falls
@@ -49,48 +51,87 @@ struct PixelShares {
   }
 };
 
-// Fits the spot (centre, energy, width: a Gaussian integrated over each
-// pixel) to the pixels by least squares (the optimizer facade), from a
-// start found by the centroid; a clipped pixel counts only where the spot
-// falls short of its bound. The model is separable, so each axis's erf
-// and exp are taken once per column and row. False when the fit fails or
-// wanders off the blob.
-bool fit_spot(const std::vector<SpotPixel>& pixels, Pixel& centre, double& energy) {
+// A spot fitted: its centre, energy and width (the Gaussian's standard
+// deviation, px), and the variances of the centre's u and v.
+struct SpotFit {
+  Pixel centre;
+  double energy = 0, sigma = 0, var_u = 0, var_v = 0;
+};
+
+// Fits the spot (centre, energy and, unless `sigma` > 0 holds it, width: a
+// Gaussian integrated over each pixel) to the pixels by weighted least
+// squares (the optimizer facade), from `start`; a clipped pixel counts only
+// where the spot falls short of its bound. The model is separable, so each
+// axis's erf and exp are taken once per column and row. nullopt when the
+// fit fails or wanders off the blob.
+std::optional<SpotFit> fit_spot(const std::vector<SpotPixel>& pixels, const Pixel& start, double start_energy,
+                                double sigma) {
+  if (pixels.empty()) return std::nullopt;
   int u0 = pixels.front().u, u1 = u0, v0 = pixels.front().v, v1 = v0;
   for (const SpotPixel& p : pixels) {
     u0 = std::min(u0, p.u), u1 = std::max(u1, p.u), v0 = std::min(v0, p.v), v1 = std::max(v1, p.v);
   }
-  // Parameters: centre u and v, energy, log of the width (so that it stays positive).
-  std::array<double, 4> x{centre.u, centre.v, energy, std::log(0.8)};
+  const bool free_width = !(sigma > 0);
+  const int n = free_width ? 4 : 3;
+  // Parameters: centre u and v, energy, and the log of the width (so that it stays positive).
+  std::array<double, 4> x{start.u, start.v, start_energy, std::log(free_width ? 0.8 : sigma)};
   PixelShares along_u, along_v;
   const optimizer::ResidualFunction residuals = [&](const double* q, double* r, double* jacobian) {
     if (!(std::abs(q[3]) < 3)) return false;  // a width between 0.05 and 20 px
-    const double sigma = std::exp(q[3]);
-    along_u.compute(u0, u1 - u0 + 1, q[0], sigma);
-    along_v.compute(v0, v1 - v0 + 1, q[1], sigma);
+    const double width = free_width ? std::exp(q[3]) : sigma;
+    along_u.compute(u0, u1 - u0 + 1, q[0], width);
+    along_v.compute(v0, v1 - v0 + 1, q[1], width);
     for (std::size_t i = 0; i < pixels.size(); ++i) {
       const int iu = pixels[i].u - u0, iv = pixels[i].v - v0;
       const double pu = along_u.share[iu], pv = along_v.share[iv];
       const double d = q[2] * pu * pv - pixels[i].value;
-      const bool counts = !pixels[i].at_least || d < 0;
-      r[i] = counts ? d : 0.0;
+      const double w = !pixels[i].at_least || d < 0 ? pixels[i].weight : 0.0;
+      r[i] = w * d;
       if (!jacobian) continue;
-      double* row = jacobian + 4 * i;
-      row[0] = counts ? q[2] * along_u.by_centre[iu] * pv : 0.0;
-      row[1] = counts ? q[2] * pu * along_v.by_centre[iv] : 0.0;
-      row[2] = counts ? pu * pv : 0.0;
-      row[3] = counts ? q[2] * sigma * (along_u.by_width[iu] * pv + pu * along_v.by_width[iv]) : 0.0;
+      double* row = jacobian + n * i;
+      row[0] = w * q[2] * along_u.by_centre[iu] * pv;
+      row[1] = w * q[2] * pu * along_v.by_centre[iv];
+      row[2] = w * pu * pv;
+      if (free_width) row[3] = w * q[2] * width * (along_u.by_width[iu] * pv + pu * along_v.by_width[iv]);
     }
     return true;
   };
-  const optimizer::Summary summary = optimizer::solve(static_cast<int>(pixels.size()), x, residuals);
-  if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !(x[2] > 0)) return false;
+  const optimizer::Summary summary =
+      optimizer::solve(static_cast<int>(pixels.size()), std::span<double>(x.data(), n), residuals);
+  if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !(x[2] > 0)) return std::nullopt;
   // A fit that wandered off the blob is no better than the centroid.
-  if (summary.final_cost > summary.initial_cost || std::hypot(x[0] - centre.u, x[1] - centre.v) > 1.5) return false;
-  centre = {x[0], x[1]};
-  energy = x[2];
-  return true;
+  if (summary.final_cost > summary.initial_cost || std::hypot(x[0] - start.u, x[1] - start.v) > 1.5) {
+    return std::nullopt;
+  }
+  // The centre's covariance, (J^T J)^-1 of the weighted residuals.
+  std::vector<double> r(pixels.size()), jacobian(pixels.size() * n);
+  if (!residuals(x.data(), r.data(), jacobian.data())) return std::nullopt;
+  cv::Mat normal = cv::Mat::zeros(n, n, CV_64F);
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    for (int a = 0; a < n; ++a) {
+      for (int b = 0; b < n; ++b) normal.at<double>(a, b) += jacobian[n * i + a] * jacobian[n * i + b];
+    }
+  }
+  cv::Mat covariance;
+  if (!(cv::invert(normal, covariance, cv::DECOMP_CHOLESKY) > 0)) return std::nullopt;
+  SpotFit fit;
+  fit.centre = {x[0], x[1]};
+  fit.energy = x[2];
+  fit.sigma = free_width ? std::exp(x[3]) : sigma;
+  fit.var_u = covariance.at<double>(0, 0);
+  fit.var_v = covariance.at<double>(1, 1);
+  return fit;
 }
+
+// A saturated glint's spot, for fitting once the frame's width is known:
+// its pixels with the background from just outside its core ([0]) and
+// from beyond its flank ([1]), and where the fit starts.
+struct SaturatedSpot {
+  std::size_t glint;  // index into the frame's glints
+  Pixel start;
+  double start_energy;
+  std::array<std::vector<SpotPixel>, 2> pixels;
+};
 
 // Images of a frame's size, kept per thread from frame to frame: fresh
 // ones cost a page fault per 4 KB, as much as the detection itself.
@@ -124,6 +165,12 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
   if (s.centroid_margin_px < 0 || s.centroid_margin_px > 20) {
     fail("centroid_margin_px = " + std::to_string(s.centroid_margin_px) + ": must be in [0, 20]");
   }
+  if (!(s.spot_sigma_px == 0 || (s.spot_sigma_px >= 0.1 && s.spot_sigma_px <= 10))) {
+    fail("spot_sigma_px = " + std::to_string(s.spot_sigma_px) + ": must be 0 or in [0.1, 10]");
+  }
+  if (!(s.pixel_noise > 0 && s.pixel_noise < 1)) {
+    fail("pixel_noise = " + std::to_string(s.pixel_noise) + ": must be in (0, 1)");
+  }
 }
 
 std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
@@ -156,6 +203,8 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
   const int count = static_cast<int>(found.size());
 
   std::vector<Glint> glints;
+  std::vector<SaturatedSpot> spots;
+  const double pixel_noise = settings_.pixel_noise * top;
   const int m = settings_.centroid_margin_px;
   for (int label = 1; label < count; ++label) {
     const int area = found[label].area;
@@ -219,7 +268,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
     const double radius = std::sqrt(area / std::numbers::pi) + m + 0.5;
     Pixel centre{box.x + 0.5 * (box.width - 1), box.y + 0.5 * (box.height - 1)};
     // The window's pixels within `within` of the centre that belong to no
-    // other blob: what the centroid and the fit weigh.
+    // other blob: what the centroid weighs.
     const auto weighs = [&](int u, int v, double within) {
       const int other = labels.at<int>(v, u);
       return std::hypot(u - centre.u, v - centre.v) <= within && (other == 0 || other == label);
@@ -245,28 +294,100 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
       centre = {sum_u / sum, sum_v / sum};
     }
     if (!(sum > 0)) continue;
-    // A clipped plateau is symmetric only on an even background; on an
-    // edge (the pupil's) its brighter side reaches farther. The spot's
-    // unclipped flanks above the background tell its centre there.
-    double energy = sum;
-    if (saturated) {
-      std::vector<SpotPixel> pixels;
-      for (int y = 0; y < window.height; ++y) {
-        for (int x = 0; x < window.width; ++x) {
-          const int u = window.x + x, v = window.y + y;
-          if (!weighs(u, v, radius + 1)) continue;
-          pixels.push_back({u, v, above.at<float>(v, u) - pedestal, grey.at<float>(v, u) >= top});
-        }
-      }
-      fit_spot(pixels, centre, energy);
-    }
     Glint g;
     g.centre = centre;
-    g.energy_dn = energy;
+    g.energy_dn = sum;
     g.peak_dn = peak;
     g.area_px = area;
     g.saturated = saturated;
+    // A clipped plateau is symmetric only on an even background; on an
+    // edge (the pupil's) its brighter side reaches farther. The spot's
+    // unclipped flanks above the background tell its centre there: fitted
+    // below, once the frame's width is known.
+    if (saturated) {
+      const cv::Mat core = joined == peak_part;  // above the level halfway to the peak
+      SaturatedSpot spot{glints.size(), {}, sum, {}};
+      const cv::Moments moments = cv::moments(core, true);
+      spot.start = {window.x + moments.m10 / moments.m00, window.y + moments.m01 / moments.m00};
+      const cv::Mat own = labels(window);
+      const cv::Mat ours = (own == 0) | (own == label);
+      for (int flank = 0; flank < 2; ++flank) {
+        // Where the background is unseen: the core, and the second time its
+        // flank too. The fit takes a pixel more, whose background is mostly
+        // itself: it holds the spot's tails near zero.
+        cv::Mat unseen, fitted;
+        cv::dilate(core, unseen, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * flank + 1, 2 * flank + 1}));
+        cv::dilate(core, fitted, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * flank + 3, 2 * flank + 3}));
+        const cv::Mat seen = ~unseen & ours;
+        for (int y = 0; y < window.height; ++y) {
+          for (int x = 0; x < window.width; ++x) {
+            if (!fitted.at<std::uint8_t>(y, x) || !ours.at<std::uint8_t>(y, x)) continue;
+            // The background under the pixel: the median of the nearest
+            // five or more pixels seen (the smallest square about it that
+            // holds them), and their scatter (1.4826 x the median absolute
+            // deviation).
+            around.clear();
+            for (int k = 1; k <= 2 * r && around.size() < 5; ++k) {
+              around.clear();
+              for (int yy = std::max(0, y - k); yy <= std::min(window.height - 1, y + k); ++yy) {
+                for (int xx = std::max(0, x - k); xx <= std::min(window.width - 1, x + k); ++xx) {
+                  if (seen.at<std::uint8_t>(yy, xx)) around.push_back(grey(window).at<float>(yy, xx));
+                }
+              }
+            }
+            if (around.empty()) continue;
+            const auto middle = around.begin() + around.size() / 2;
+            std::nth_element(around.begin(), middle, around.end());
+            const double background = *middle;
+            for (float& a : around) a = std::abs(a - static_cast<float>(background));
+            std::nth_element(around.begin(), middle, around.end());
+            const double scatter = 1.4826 * *middle;
+            const double value = grey(window).at<float>(y, x);
+            spot.pixels[flank].push_back({window.x + x, window.y + y, value - background, value >= top,
+                                          1 / std::hypot(pixel_noise, scatter)});
+          }
+        }
+      }
+      spots.push_back(std::move(spot));
+    }
     glints.push_back(g);
+  }
+
+  // The saturated glints' shared width: the camera's point spread, as
+  // told or as the median of their own fits (one spot's flanks hardly
+  // tell width from centre).
+  double sigma = settings_.spot_sigma_px;
+  if (!(sigma > 0) && !spots.empty()) {
+    std::vector<double> widths;
+    for (const SaturatedSpot& spot : spots) {
+      if (const auto fit = fit_spot(spot.pixels[1], spot.start, spot.start_energy, 0)) widths.push_back(fit->sigma);
+    }
+    if (!widths.empty()) {
+      std::sort(widths.begin(), widths.end());
+      const std::size_t half = widths.size() / 2;
+      sigma = widths.size() % 2 ? widths[half] : 0.5 * (widths[half - 1] + widths[half]);
+    }
+  }
+  for (const SaturatedSpot& spot : spots) {
+    // Without a width (no spot could be fitted), each spot fits its own.
+    const auto near = fit_spot(spot.pixels[0], spot.start, spot.start_energy, sigma);
+    const auto far = fit_spot(spot.pixels[1], spot.start, spot.start_energy, sigma);
+    Glint& g = glints[spot.glint];
+    if (near && far) {
+      // The unseen background lies between the two estimates: the mean of
+      // the fits, with half their difference as a further error.
+      const double du = 0.5 * (near->centre.u - far->centre.u), dv = 0.5 * (near->centre.v - far->centre.v);
+      g.centre = {0.5 * (near->centre.u + far->centre.u), 0.5 * (near->centre.v + far->centre.v)};
+      g.energy_dn = 0.5 * (near->energy + far->energy);
+      g.centre_sd_u_px = std::sqrt(0.5 * (near->var_u + far->var_u) + du * du);
+      g.centre_sd_v_px = std::sqrt(0.5 * (near->var_v + far->var_v) + dv * dv);
+    } else if (near || far) {
+      const SpotFit& fit = near ? *near : *far;
+      g.centre = fit.centre;
+      g.energy_dn = fit.energy;
+      g.centre_sd_u_px = std::sqrt(fit.var_u);
+      g.centre_sd_v_px = std::sqrt(fit.var_v);
+    }
   }
   std::sort(glints.begin(), glints.end(), [](const Glint& a, const Glint& b) { return a.energy_dn > b.energy_dn; });
   return glints;

@@ -22,6 +22,10 @@ struct Glint {
   int area_px = 0;           // pixels above the detection threshold
   bool saturated = false;    // some pixel at the image's largest value
   int illuminator = -1;      // which light made it, once matched (-1: not matched)
+  // The centre's standard deviation along u and v, px, where the detector
+  // estimates it (a saturated glint's spot fit: the pixels' noise and the
+  // unseen background under the spot); 0: not estimated.
+  double centre_sd_u_px = 0, centre_sd_v_px = 0;
 };
 
 // A glint detector (strategy): the detectors of purkinje and of users are
@@ -44,7 +48,13 @@ class GlintDetector {
 // even background; on an edge (the pupil's) its brighter side reaches
 // farther, so a saturated glint's centre comes from a fit of a
 // pixel-integrated Gaussian to its unclipped flanks above the background
-// (a clipped pixel only bounds it from below).
+// (a clipped pixel only bounds it from below). The background under the
+// spot is unseen: each pixel's is the median of the nearest pixels seen
+// around it, which on the pupil's edge lie on its own side, and two such
+// estimates (from just outside the spot's core, and from beyond its
+// flank) bracket it; the centre is the mean of the two fits, and their
+// difference enters the centre's standard deviation. All saturated
+// glints of a frame share one width (the camera's point spread).
 struct BlobGlintSettings {
   int background_radius_px = 6;   // the opening's square is 2r + 1 wide: glints are narrower
   // Blobs are what stands above the local background by more than both:
@@ -54,6 +64,17 @@ struct BlobGlintSettings {
   int min_area_px = 1;
   int max_area_px = 400;          // larger bright regions are not glints (specular skin, glasses)
   int centroid_margin_px = 1;     // the centroid's disc reaches this far beyond the blob's radius
+  // A saturated glint's spot: the Gaussian's standard deviation in px (the
+  // camera's point spread, when the tracker knows it), or 0: the median of
+  // the frame's saturated glints' own fits. 0 or in [0.1, 10].
+  double spot_sigma_px = 0;
+  // The noise of a pixel on a glint's flank, a fraction of full scale, in
+  // (0, 1): with the scatter of the background seen around it, what
+  // weighs each pixel in the spot fit, and so the centre's standard
+  // deviation. 3 DN on 8 bits: the bundled sensors' shot noise on a flank
+  // is 2 to 2.5 DN, and 3 DN makes the reported deviations match the
+  // errors on their renders (docs/trackers.md).
+  double pixel_noise = 0.012;
 };
 
 class BlobGlintDetector final : public GlintDetector {

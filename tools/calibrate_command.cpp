@@ -12,6 +12,7 @@
 #include <iostream>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
+#include "purkinje/renderer/sensor_model.h"
 #include "purkinje/trackers/cornea.h"
 #include "purkinje/trackers/gaze.h"
 #include "purkinje/trackers/glints.h"
@@ -43,8 +45,9 @@ struct Frame {
   std::optional<trackers::GazeFeatures> found;  // from the image; nullopt: a glint or the pupil missed
   int glints_told = 0;
   // The detections' errors against the labels, per axis (px): each told
-  // glint's on the cornea, and the pupil ellipse's centre.
-  std::vector<double> glint_errors_px, pupil_errors_px;
+  // glint's on the cornea, and the pupil ellipse's centre; and the errors
+  // over their reported standard deviations, of the glints that report one.
+  std::vector<double> glint_errors_px, pupil_errors_px, glint_errors_sd;
 };
 
 std::string format(double value, int digits = 4) {
@@ -57,7 +60,8 @@ std::string format(double value, int digits = 4) {
 // Renders the eye fixating `target` from rotation centre `center` and
 // reads the image with the detectors.
 Frame render_frame(const Scene& rig, const Point3& center, int position, const ScreenPoint& target,
-                   const std::vector<std::optional<Pixel>>& layout, std::uint64_t seed) {
+                   const std::vector<std::optional<Pixel>>& layout, const trackers::BlobGlintSettings& glint_settings,
+                   std::uint64_t seed) {
   Frame f;
   f.position = position;
   f.target = target;
@@ -72,7 +76,7 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
   const renderer::RenderResult result = renderer::render(scene, 0, options);
   const trackers::GreyView image = trackers::grey_view(std::span<const std::uint16_t>(result.sensor.values), result.sensor.width,
                                              result.sensor.height, result.sensor.bits);
-  std::vector<trackers::Glint> glints = trackers::BlobGlintDetector().detect(image);
+  std::vector<trackers::Glint> glints = trackers::BlobGlintDetector(glint_settings).detect(image);
   trackers::identify_glints(glints, layout);
   const std::optional<trackers::PupilDetection> pupil = trackers::StarburstPupilDetector().detect(image, glints);
   const EyeInCameraTruth& view = result.truth.views.front();
@@ -83,6 +87,10 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
     if (label.status == PathStatus::ok && std::hypot(g.centre.u - label.pixel.u, g.centre.v - label.pixel.v) <= 5) {
       f.glint_errors_px.push_back(g.centre.u - label.pixel.u);
       f.glint_errors_px.push_back(g.centre.v - label.pixel.v);
+      if (g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0) {
+        f.glint_errors_sd.push_back((g.centre.u - label.pixel.u) / g.centre_sd_u_px);
+        f.glint_errors_sd.push_back((g.centre.v - label.pixel.v) / g.centre_sd_v_px);
+      }
     }
   }
   if (pupil && view.pupil.ellipse_valid) {
@@ -185,16 +193,33 @@ int run_calibrate(const CalibrateRequest& request) {
     positions.push_back({"moved " + format(m[0]) + "," + format(m[1]) + "," + format(m[2]) + " mm",
                          home + Vector3{m[0], m[1], m[2]}});
   }
-  std::vector<Frame> calibration, tests;
+  std::vector<Frame> calibration, tests, noise_frames;
+  double spot_sigma_px = 0;
   std::uint64_t seed = request.seed;
   try {
+    // The tracker knows its optics: a glint's spot is the camera's point
+    // spread at the eye's depth, which the glint detector need not guess.
+    trackers::BlobGlintSettings glint_settings;
+    const double depth = (camera.camera_from_world() * nominal_cornea).z;
+    const renderer::PointSpread spread = renderer::point_spread(camera, depth);
+    glint_settings.spot_sigma_px = std::clamp(
+        std::sqrt(spread.sigma_px * spread.sigma_px + spread.defocus_radius_px * spread.defocus_radius_px / 4), 0.1, 10.0);
+    spot_sigma_px = glint_settings.spot_sigma_px;
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
-      calibration.push_back(render_frame(rig, home, 0, t, layout, seed++));
+      calibration.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
     }
     for (std::size_t p = 0; p < positions.size(); ++p) {
       for (const ScreenPoint& t : screen.grid(request.grid, request.grid)) {
-        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, layout, seed++));
+        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, layout, glint_settings, seed++));
       }
+    }
+    // Targets uniform over the screen, from the seed: the noise frames
+    // are neither calibration nor test frames.
+    std::mt19937_64 random(request.seed);
+    std::uniform_real_distribution<double> along(0, 1);
+    for (int i = 0; i < request.noise_frames; ++i) {
+      const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
+      noise_frames.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
     }
   } catch (const std::exception& error) {
     std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
@@ -226,7 +251,9 @@ int run_calibrate(const CalibrateRequest& request) {
                             double fallback) {
     if (given) return *given;
     std::vector<double> all;
-    for (const Frame& f : calibration) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
+    for (const Frame& f : noise_frames.empty() ? calibration : noise_frames) {
+      all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
+    }
     double sd = INFINITY;
     for (int round = 0; round < 20; ++round) {
       double sum = 0;
@@ -240,13 +267,22 @@ int run_calibrate(const CalibrateRequest& request) {
     }
     return std::max(1e-3, sd);
   };
-  const trackers::FeatureNoise noise{
+  trackers::FeatureNoise noise{
       measured(&Frame::glint_errors_px, request.glint_noise_px, trackers::FeatureNoise{}.glint_px),
       measured(&Frame::pupil_errors_px, request.pupil_noise_px, trackers::FeatureNoise{}.pupil_px)};
+  // Glints that report their own standard deviation (saturated ones) keep
+  // it, scaled by the RMS of their errors over it, measured the same way;
+  // a given --glint-noise serves every glint.
+  const std::vector<Frame>& measured_on = noise_frames.empty() ? calibration : noise_frames;
+  const bool own_glint_sd =
+      !request.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(),
+                                             [](const Frame& f) { return !f.glint_errors_sd.empty(); });
+  if (own_glint_sd) noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
   trackers::ModelGazeCalibrationSettings settings;
   settings.fit_cornea_radius = request.fit_radius;
   settings.fit_pupil_depth = request.fit_pupil_depth;
   settings.pixel_noise_px = noise.glint_px;
+  settings.glint_sd_scale = noise.glint_sd_scale;
   settings.propagate_noise = noise;
   trackers::ModelGazeCalibration model;
   std::optional<trackers::PolynomialGaze> polynomial;
@@ -301,9 +337,16 @@ int run_calibrate(const CalibrateRequest& request) {
       r.add("rotation_center", std::string("not determined: the optical axes are too alike"));
     }
     r.add("glint_noise", noise.glint_px, "px");
-    r.add("glint_noise_from", request.glint_noise_px ? std::string("given") : std::string("measured"));
+    const std::string measured_from = noise_frames.empty()
+                                          ? std::string("measured on the calibration frames")
+                                          : "measured on " + std::to_string(noise_frames.size()) + " noise frames";
+    r.add("glint_noise_from", request.glint_noise_px ? std::string("given") : measured_from);
+    r.add("glint_spot_sigma", spot_sigma_px, "px");
+    r.add("glint_sd_scale", noise.glint_sd_scale);
+    r.add("glint_sd_from", own_glint_sd ? "the detector's, scaled as " + measured_from
+                                        : std::string("none: every glint has glint_noise"));
     r.add("pupil_noise", noise.pupil_px, "px");
-    r.add("pupil_noise_from", request.pupil_noise_px ? std::string("given") : std::string("measured"));
+    r.add("pupil_noise_from", request.pupil_noise_px ? std::string("given") : measured_from);
     std::string warnings;
     for (const std::string& w : model.warnings) warnings += (warnings.empty() ? "" : "; ") + w;
     r.add("warnings", warnings.empty() ? std::string("none") : warnings);

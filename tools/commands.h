@@ -42,8 +42,12 @@ struct CalibrateRequest {
   bool fit_radius = false;
   bool fit_pupil_depth = false;
   // The detectors' noise (s.d., px) the reported uncertainties assume;
-  // absent: measured on the calibration frames against their labels.
+  // absent: measured against the labels of the noise frames (below).
   std::optional<double> glint_noise_px, pupil_noise_px;
+  // Frames of the eye at its place fixating random screen points, rendered
+  // only to measure the detectors' noise against their labels; 0: the
+  // calibration frames serve (nine measure a deviation to about 12%).
+  int noise_frames = 64;
   std::uint64_t seed = 1;       // of the first frame's render; each next frame the next
 };
 

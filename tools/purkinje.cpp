@@ -406,6 +406,10 @@ int run(int argc, char** argv) {
                         "The pupil detector's noise (s.d., px) the uncertainties assume\n"
                         "(default: measured on the calibration frames against their labels)")
       ->check(CLI::Range(1e-6, 10.0));
+  calibrate->add_option("--noise-frames", calibrate_request.noise_frames,
+                        "Frames at random targets that only measure the detectors' noise (0: the calibration frames)")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
   calibrate->add_option("--seed", calibrate_request.seed, "Render seed of the first frame")->capture_default_str();
 
   try {

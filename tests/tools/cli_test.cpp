@@ -442,7 +442,9 @@ TEST_F(Cli, ScoreNamesTheLineOfAMalformedDetectionAndWritesNothing) {
 // and scores, writing a table, its JSON, the frames and the gaze map.
 TEST_F(Cli, CalibrateWritesItsTableFramesAndGazeMap) {
   const std::string scene = quoted((kSourceDir / "assets/scenes/headset.json").string());
-  ASSERT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --grid 2 --fit-radius"), 0) << err();
+  ASSERT_EQ(run("calibrate " + scene + " -o " + quoted(output_dir_.string()) + " --grid 2 --fit-radius --noise-frames 3"),
+            0)
+      << err();
   for (const char* name : {"calibration.txt", "calibration.json", "frames.csv", "gaze_error.png"}) {
     EXPECT_TRUE(fs::exists(output_dir_ / name)) << name;
   }
@@ -453,10 +455,15 @@ TEST_F(Cli, CalibrateWritesItsTableFramesAndGazeMap) {
   EXPECT_EQ(calibration["results"]["frames_used"], 9);
   EXPECT_NEAR(calibration["results"]["cornea_radius"].get<double>(), 7.8, 0.2);  // the scene's
   EXPECT_EQ(calibration["results"]["tracker_cornea_from"], "the scene's eye");
-  // The detectors' noise, measured against the labels: some hundredths of a pixel.
-  EXPECT_EQ(calibration["results"]["glint_noise_from"], "measured");
+  // The detectors' noise, measured against the noise frames' labels: some
+  // hundredths of a pixel; the saturated glints' own deviations, scaled
+  // as measured; the spot's width, the camera's point spread.
+  EXPECT_EQ(calibration["results"]["glint_noise_from"], "measured on 3 noise frames");
   EXPECT_GT(calibration["results"]["glint_noise"].get<double>(), 0.005);
   EXPECT_LT(calibration["results"]["glint_noise"].get<double>(), 0.5);
+  EXPECT_GT(calibration["results"]["glint_sd_scale"].get<double>(), 0.2);
+  EXPECT_LT(calibration["results"]["glint_sd_scale"].get<double>(), 5);
+  EXPECT_DOUBLE_EQ(calibration["results"]["glint_spot_sigma"].get<double>(), 0.5);  // headset.json's psf_sigma_px
   const json& home = results["runs"][2];
   EXPECT_EQ(home["case"], "home");
   EXPECT_EQ(home["results"]["gaze_frames"], 4);

@@ -296,6 +296,67 @@ TEST(CorneaFit, RejectsAGlintFarFromTheFitAndKeepsTheRest) {
   EXPECT_TRUE(estimate_cornea_center(scene.cameras[0], scene.illuminators, three, truth).rejected.empty());
 }
 
+// A glint's own standard deviation weighs it. Given to every glint alike,
+// it is pixel_noise_px: the same covariance. Made four times larger for
+// one glint, that glint's error moves the centre less, the covariance
+// grows, and its residual in its own deviations is its pixels' over it.
+TEST(CorneaFit, EachGlintsOwnDeviationWeighsIt) {
+  const Scene scene = bundled("headset");
+  std::vector<Glint> glints = exact_glints(scene);
+  ASSERT_EQ(glints.size(), 8u);
+  const Point3 truth = scene.eyes[0].cornea_center();
+  for (Glint& g : glints) g.centre_sd_u_px = g.centre_sd_v_px = 0.02;
+  std::vector<GlintObservation> alike;
+  add_observations(alike, glints, 0, 0, 2.5);  // 0.05 px each
+  for (const GlintObservation& o : alike) {
+    EXPECT_DOUBLE_EQ(o.sd_u_px, 0.05);
+    EXPECT_DOUBLE_EQ(o.sd_v_px, 0.05);
+  }
+  const CorneaFit own = fit_cornea(scene.cameras, scene.illuminators, alike, {truth});
+  std::vector<GlintObservation> plain;
+  add_observations(plain, glints, 0);  // scale 0: the glints' own deviations are not used
+  EXPECT_EQ(plain[0].sd_u_px, 0);
+  const CorneaFit given = fit_cornea(scene.cameras, scene.illuminators, plain, {truth}, {.pixel_noise_px = 0.05});
+  ASSERT_TRUE(own.has_covariance() && given.has_covariance());
+  for (std::size_t i = 0; i < own.covariance_mm2.size(); ++i) {
+    EXPECT_NEAR(own.covariance_mm2[i], given.covariance_mm2[i], 1e-9 * std::abs(given.covariance_mm2[0]));
+  }
+
+  // Glint 2 off by 0.2 px along u: with 4x its deviation it pulls less.
+  std::vector<GlintObservation> off = alike;
+  off[2].pixel.u += 0.2;
+  std::vector<GlintObservation> doubted = off;
+  doubted[2].sd_u_px = doubted[2].sd_v_px = 0.2;
+  CorneaFitSettings keep_all;
+  keep_all.reject_beyond_sd = 0;
+  const CorneaFit pulled = fit_cornea(scene.cameras, scene.illuminators, off, {truth}, keep_all);
+  const CorneaFit less = fit_cornea(scene.cameras, scene.illuminators, doubted, {truth}, keep_all);
+  EXPECT_LT(distance(less.centers[0], truth), 0.5 * distance(pulled.centers[0], truth));
+  EXPECT_GT(less.center_covariance(0)[0], own.center_covariance(0)[0]);
+  ASSERT_EQ(less.glint_residuals_sd.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i) {
+    const double sd = i == 2 ? 0.2 : 0.05;
+    EXPECT_NEAR(less.glint_residuals_sd[i], less.glint_residuals_px[i] / sd, 1e-9) << i;
+  }
+  // Rejection counts in the glint's own deviations: 0.2 px is 4 of 0.05
+  // but 1 of 0.2 px.
+  CorneaFitSettings strict;
+  strict.reject_beyond_sd = 3;
+  EXPECT_EQ(fit_cornea(scene.cameras, scene.illuminators, off, {truth}, strict).rejected, std::vector<int>{2});
+  EXPECT_TRUE(fit_cornea(scene.cameras, scene.illuminators, doubted, {truth}, strict).rejected.empty());
+
+  // Bad deviations and scales are refused by name.
+  std::vector<GlintObservation> bad = alike;
+  bad[0].sd_v_px = -1;
+  try {
+    fit_cornea(scene.cameras, scene.illuminators, bad, {truth});
+    FAIL() << "a negative deviation was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sd_v_px"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(add_observations(plain, glints, 0, 0, -1), std::invalid_argument);
+}
+
 TEST(CorneaFit, RejectsBadSettingsAndUnknownIndicesByName) {
   const Scene scene = bundled("headset");
   const std::vector<Glint> glints = exact_glints(scene);

@@ -372,6 +372,58 @@ TEST(ModelGaze, ReportedUncertaintyMatchesTheScatterUnderFeatureNoise) {
   }
 }
 
+// Glints that report their own deviation (a saturated glint of the blob
+// detector) carry it, times FeatureNoise::glint_sd_scale, into the cornea
+// fit and the propagation: the same as a common glint_px when all are
+// alike, and more uncertainty when one is doubted.
+TEST(ModelGaze, GlintsOwnDeviationsCarryIntoTheReportedUncertainty) {
+  const GazeRig s;
+  GazeEyeModel model = s.tracker_eye();
+  const ScreenPoint target{120, 80};
+  GazeFeatures own = *exact_gaze_features(s.view(s.home, target), PupilFeature::refracted_center);
+  for (Glint& g : own.glints) g.centre_sd_u_px = g.centre_sd_v_px = 0.04;
+  const FeatureNoise common{0.1, 0.05};
+  FeatureNoise scaled{0.3, 0.05};  // glint_px only for glints without their own
+  scaled.glint_sd_scale = 2.5;     // 0.04 x 2.5 = 0.1 px
+  const Camera& camera = s.rig.cameras[0];
+  const ModelGaze a = estimate_model_gaze(camera, s.rig.illuminators, own, model, s.screen, s.home, common);
+  const ModelGaze b = estimate_model_gaze(camera, s.rig.illuminators, own, model, s.screen, s.home, scaled);
+  ASSERT_TRUE(a.on_screen_covariance_mm2 && b.on_screen_covariance_mm2);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR((*b.on_screen_covariance_mm2)[i], (*a.on_screen_covariance_mm2)[i],
+                1e-6 * (*a.on_screen_covariance_mm2)[0]) << i;
+  }
+  for (int i = 0; i < 9; ++i) {
+    EXPECT_NEAR(b.cornea_covariance_mm2[i], a.cornea_covariance_mm2[i], 1e-9 * a.cornea_covariance_mm2[0]) << i;
+  }
+  own.glints[0].centre_sd_u_px = own.glints[0].centre_sd_v_px = 0.4;
+  const ModelGaze doubted = estimate_model_gaze(camera, s.rig.illuminators, own, model, s.screen, s.home, scaled);
+  ASSERT_TRUE(doubted.on_screen_covariance_mm2);
+  EXPECT_GT((*doubted.on_screen_covariance_mm2)[0] + (*doubted.on_screen_covariance_mm2)[3],
+            (*a.on_screen_covariance_mm2)[0] + (*a.on_screen_covariance_mm2)[3]);
+
+  // The calibration's propagated covariance likewise.
+  std::vector<GazeFeatures> frames;
+  std::vector<Point3> targets;
+  for (const ScreenPoint& t : s.screen.grid(3, 3)) {
+    frames.push_back(*exact_gaze_features(s.view(s.home, t), PupilFeature::refracted_center));
+    for (Glint& g : frames.back().glints) g.centre_sd_u_px = g.centre_sd_v_px = 0.04;
+    targets.push_back(s.screen.at(t));
+  }
+  ModelGazeCalibrationSettings plain, with_own;
+  plain.propagate_noise = common;
+  with_own.propagate_noise = scaled;
+  with_own.glint_sd_scale = scaled.glint_sd_scale;
+  const ModelGazeCalibration c1 = calibrate_model_gaze(camera, s.rig.illuminators, frames, targets, model, s.home, plain);
+  const ModelGazeCalibration c2 =
+      calibrate_model_gaze(camera, s.rig.illuminators, frames, targets, model, s.home, with_own);
+  ASSERT_EQ(c1.covariance.size(), c2.covariance.size());
+  ASSERT_FALSE(c1.covariance.empty());
+  for (std::size_t i = 0; i < c1.covariance.size(); ++i) {
+    EXPECT_NEAR(c2.covariance[i], c1.covariance[i], 1e-6 * c1.covariance[0]) << i;
+  }
+}
+
 // The calibration's covariances, propagated from the features' noise,
 // against the scatter of kappa and the centre of rotation over noisy
 // draws of the nine calibration frames: within 20%.

@@ -181,6 +181,12 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     if (g.frame < 0 || g.frame >= frames) bad("frame", g.frame, starts.size());
     if (g.camera < 0 || g.camera >= static_cast<int>(cameras.size())) bad("camera", g.camera, cameras.size());
     if (g.light < 0 || g.light >= static_cast<int>(lights.size())) bad("light", g.light, lights.size());
+    for (const double sd : {g.sd_u_px, g.sd_v_px}) {
+      if (!(sd >= 0 && std::isfinite(sd))) {
+        throw std::invalid_argument("fit_cornea: a glint's standard deviation (sd_u_px or sd_v_px) = " + number(sd) +
+                                    ": must be finite and >= 0 (0: pixel_noise_px)");
+      }
+    }
     ++per_frame[g.frame];
     if (std::find(cameras_used.begin(), cameras_used.end(), g.camera) == cameras_used.end()) {
       cameras_used.push_back(g.camera);
@@ -212,6 +218,17 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   const int m = 2 * static_cast<int>(glints.size()) + (prior ? 1 : 0);
   std::vector<std::optional<UnitVector3>> warm(glints.size());
   const bool sphere = s.cornea_asphericity == 0;
+  // Each glint's pixel over its standard deviation: the residuals are
+  // whitened, so that J^T J is the inverse covariance.
+  std::vector<double> sd(2 * glints.size());
+  bool own_noise = false;
+  for (std::size_t i = 0; i < glints.size(); ++i) {
+    sd[2 * i] = glints[i].sd_u_px > 0 ? glints[i].sd_u_px : s.pixel_noise_px;
+    sd[2 * i + 1] = glints[i].sd_v_px > 0 ? glints[i].sd_v_px : s.pixel_noise_px;
+    own_noise = own_noise || glints[i].sd_u_px > 0 || glints[i].sd_v_px > 0;
+  }
+  const std::string noise = own_noise ? "the glints' own noise (" + number(s.pixel_noise_px) + " px where none is given)"
+                                      : number(s.pixel_noise_px) + " px of glint noise";
   const optimizer::ResidualFunction residuals = [&](const double* x, double* r, double* jacobian) {
     const double radius = s.fit_radius ? x[n - 1] : s.cornea_radius_mm;
     if (jacobian != nullptr) std::fill_n(jacobian, static_cast<std::size_t>(m) * n, 0.0);
@@ -225,21 +242,18 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
                          jacobian != nullptr);
       if (!g) return false;
       warm[i] = g->normal;
-      r[2 * i] = g->pixel.u - o.pixel.u;
-      r[2 * i + 1] = g->pixel.v - o.pixel.v;
+      r[2 * i] = (g->pixel.u - o.pixel.u) / sd[2 * i];
+      r[2 * i + 1] = (g->pixel.v - o.pixel.v) / sd[2 * i + 1];
       if (jacobian == nullptr) continue;
       for (int row = 0; row < 2; ++row) {
         double* j = jacobian + (2 * i + row) * n;
-        for (int k = 0; k < 3; ++k) j[3 * o.frame + k] = g->d_pixel[4 * row + k];
-        if (s.fit_radius) j[n - 1] = g->d_pixel[4 * row + 3];
+        for (int k = 0; k < 3; ++k) j[3 * o.frame + k] = g->d_pixel[4 * row + k] / sd[2 * i + row];
+        if (s.fit_radius) j[n - 1] = g->d_pixel[4 * row + 3] / sd[2 * i + row];
       }
     }
     if (prior) {
-      // In pixels, so that it weighs as (radius - r0) / prior sd once the
-      // residuals are divided by the pixel noise.
-      const double scale = s.pixel_noise_px / s.radius_prior_sd_mm;
-      r[m - 1] = (radius - s.cornea_radius_mm) * scale;
-      if (jacobian != nullptr) jacobian[static_cast<std::size_t>(m - 1) * n + n - 1] = scale;
+      r[m - 1] = (radius - s.cornea_radius_mm) / s.radius_prior_sd_mm;
+      if (jacobian != nullptr) jacobian[static_cast<std::size_t>(m - 1) * n + n - 1] = 1 / s.radius_prior_sd_mm;
     }
     return true;
   };
@@ -279,8 +293,10 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   }
   double sum = 0;
   for (std::size_t i = 0; i < glints.size(); ++i) {
-    sum += r[2 * i] * r[2 * i] + r[2 * i + 1] * r[2 * i + 1];
-    out.glint_residuals_px.push_back(std::hypot(r[2 * i], r[2 * i + 1]));
+    const double du = r[2 * i] * sd[2 * i], dv = r[2 * i + 1] * sd[2 * i + 1];
+    sum += du * du + dv * dv;
+    out.glint_residuals_px.push_back(std::hypot(du, dv));
+    out.glint_residuals_sd.push_back(std::hypot(r[2 * i], r[2 * i + 1]));
   }
   out.rms_residual_px = std::sqrt(sum / (2.0 * glints.size()));
 
@@ -297,8 +313,8 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     return out;
   }
   const Eigen::VectorXd inverse_values = eigen.eigenvalues().cwiseInverse();
-  const Eigen::MatrixXd covariance = s.pixel_noise_px * s.pixel_noise_px * eigen.eigenvectors() *
-                                     inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  const Eigen::MatrixXd covariance =
+      eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
   out.covariance_mm2.assign(covariance.data(), covariance.data() + n * n);  // symmetric: either order
 
   for (int f = 0; f < frames; ++f) {
@@ -307,14 +323,12 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     if (sd > s.max_sd_mm) {
       out.warnings.push_back("frame " + std::to_string(f) + "'s cornea centre is weakly determined: " +
                              number(sd) + " mm standard deviation along " +
-                             direction(block.eigenvectors().col(2)) + " at " + number(s.pixel_noise_px) +
-                             " px of glint noise");
+                             direction(block.eigenvectors().col(2)) + " at " + noise);
     }
   }
   if (s.fit_radius && std::sqrt(covariance(n - 1, n - 1)) > s.max_sd_mm) {
     out.warnings.push_back("the cornea's radius is weakly determined: " +
-                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " +
-                           number(s.pixel_noise_px) + " px of glint noise");
+                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " + noise);
   }
   if (!out.converged) out.warnings.push_back("the fit stopped before converging: " + summary.message);
   return out;
@@ -339,7 +353,7 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
   std::vector<int> kept(glints.size());
   for (std::size_t i = 0; i < glints.size(); ++i) kept[i] = static_cast<int>(i);
   std::vector<int> rejected;
-  std::vector<double> rejected_residuals;
+  std::vector<double> rejected_residuals, rejected_residuals_sd;
   std::vector<std::string> notes;
   for (;;) {
     std::vector<GlintObservation> used;
@@ -348,43 +362,61 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
     // The worst glint beyond the bound whose frame can spare it.
     int worst = -1;
     if (s.reject_beyond_sd > 0 && fit.converged && fit.has_covariance() &&
-        fit.glint_residuals_px.size() == used.size()) {
+        fit.glint_residuals_sd.size() == used.size()) {
       std::vector<int> per_frame(starts.size(), 0);
       for (const GlintObservation& g : used) ++per_frame[g.frame];
-      double largest = s.reject_beyond_sd * s.pixel_noise_px;
+      double largest = s.reject_beyond_sd;
       for (std::size_t k = 0; k < used.size(); ++k) {
-        if (per_frame[used[k].frame] >= 4 && fit.glint_residuals_px[k] > largest) {
-          largest = fit.glint_residuals_px[k];
+        if (per_frame[used[k].frame] >= 4 && fit.glint_residuals_sd[k] > largest) {
+          largest = fit.glint_residuals_sd[k];
           worst = static_cast<int>(k);
         }
       }
     }
     if (worst < 0) {
       // Residuals in the caller's order, the rejected at their last fit's.
-      std::vector<double> residuals(glints.size(), 0.0);
+      std::vector<double> residuals(glints.size(), 0.0), in_sd(glints.size(), 0.0);
       for (std::size_t k = 0; k < kept.size() && k < fit.glint_residuals_px.size(); ++k) {
         residuals[kept[k]] = fit.glint_residuals_px[k];
+        in_sd[kept[k]] = fit.glint_residuals_sd[k];
       }
-      for (std::size_t k = 0; k < rejected.size(); ++k) residuals[rejected[k]] = rejected_residuals[k];
+      for (std::size_t k = 0; k < rejected.size(); ++k) {
+        residuals[rejected[k]] = rejected_residuals[k];
+        in_sd[rejected[k]] = rejected_residuals_sd[k];
+      }
       fit.glint_residuals_px = residuals;
+      fit.glint_residuals_sd = in_sd;
       fit.rejected = rejected;
       fit.warnings.insert(fit.warnings.begin(), notes.begin(), notes.end());
       return fit;
     }
     const GlintObservation& g = used[worst];
     notes.push_back("rejected the glint of light " + std::to_string(g.light) + " in frame " +
-                    std::to_string(g.frame) + " of camera " + std::to_string(g.camera) + ": " + number(fit.glint_residuals_px[worst]) + " px from the fit, over " +
-                    number(s.reject_beyond_sd) + " times the pixel noise");
+                    std::to_string(g.frame) + " of camera " + std::to_string(g.camera) + ": " +
+                    number(fit.glint_residuals_px[worst]) + " px from the fit, " +
+                    number(fit.glint_residuals_sd[worst]) + " of its standard deviations, over " +
+                    number(s.reject_beyond_sd));
     rejected.push_back(kept[worst]);
     rejected_residuals.push_back(fit.glint_residuals_px[worst]);
+    rejected_residuals_sd.push_back(fit.glint_residuals_sd[worst]);
     kept.erase(kept.begin() + worst);
   }
 }
 
 void add_observations(std::vector<GlintObservation>& out, const std::vector<Glint>& glints, int frame,
-                      int camera) {
+                      int camera, double glint_sd_scale) {
+  if (!(glint_sd_scale >= 0 && std::isfinite(glint_sd_scale))) {
+    throw std::invalid_argument("add_observations: glint_sd_scale = " + number(glint_sd_scale) +
+                                ": must be finite and >= 0 (0: the glints' own deviations are not used)");
+  }
   for (const Glint& g : glints) {
-    if (g.illuminator >= 0) out.push_back({frame, camera, g.illuminator, g.centre});
+    if (g.illuminator < 0) continue;
+    GlintObservation o{frame, camera, g.illuminator, g.centre};
+    if (glint_sd_scale > 0 && g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0) {
+      o.sd_u_px = glint_sd_scale * g.centre_sd_u_px;
+      o.sd_v_px = glint_sd_scale * g.centre_sd_v_px;
+    }
+    out.push_back(o);
   }
 }
 

@@ -298,17 +298,25 @@ CorneaAndAxes cornea_and_axes(const Camera& camera, const std::vector<Illuminato
   return out;
 }
 
+// A glint's standard deviation along u (axis 0) or v, as the observations
+// take it (add_observations).
+double glint_sd(const Glint& g, int axis, const FeatureNoise& noise) {
+  const double own = axis == 0 ? g.centre_sd_u_px : g.centre_sd_v_px;
+  return noise.glint_sd_scale > 0 && g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0 ? noise.glint_sd_scale * own
+                                                                                 : noise.glint_px;
+}
+
 // The estimate without its uncertainty.
 ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& lights, const GazeFeatures& features,
-                     const GazeEyeModel& model, const Screen& screen, const Point3& start, double glint_noise_px,
+                     const GazeEyeModel& model, const Screen& screen, const Point3& start, const FeatureNoise& noise,
                      double reject_beyond_sd, std::vector<int>* rejected = nullptr) {
   ModelGaze out;
   CorneaFitSettings settings;
   settings.cornea_radius_mm = model.cornea_radius_mm;
-  settings.pixel_noise_px = glint_noise_px;
+  settings.pixel_noise_px = noise.glint_px;
   settings.reject_beyond_sd = reject_beyond_sd;
   std::vector<GlintObservation> glints;
-  add_observations(glints, features.glints, 0);
+  add_observations(glints, features.glints, 0, 0, noise.glint_sd_scale);
   const CorneaAndAxes fitted = cornea_and_axes(camera, lights, glints, {features}, model, settings, {start});
   const CorneaFit& cornea = fitted.cornea;
   out.warnings = cornea.warnings;
@@ -348,8 +356,8 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
                               const Point3& start, const std::optional<FeatureNoise>& given_noise) {
   const FeatureNoise noise = given_noise.value_or(FeatureNoise{});
   std::vector<int> rejected;
-  ModelGaze out = model_gaze(camera, lights, features, model, screen, start, noise.glint_px,
-                             CorneaFitSettings{}.reject_beyond_sd, &rejected);
+  ModelGaze out =
+      model_gaze(camera, lights, features, model, screen, start, noise, CorneaFitSettings{}.reject_beyond_sd, &rejected);
   if (!given_noise || !out.valid || !out.on_screen) return out;
   // Each feature coordinate moved both ways by a small step; the screen
   // point's changes give the Jacobian, and its covariance follows. The
@@ -364,9 +372,8 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
   constexpr double step_px = 1e-3;
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
   const auto add = [&](GazeFeatures moved_plus, GazeFeatures moved_minus, double sd_px) {
-    const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise.glint_px, 0);
-    const ModelGaze minus =
-        model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise.glint_px, 0);
+    const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise, 0);
+    const ModelGaze minus = model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise, 0);
     if (!plus.on_screen || !minus.on_screen) return false;
     const Eigen::Vector2d column((plus.on_screen->x_mm - minus.on_screen->x_mm) / (2 * step_px),
                                  (plus.on_screen->y_mm - minus.on_screen->y_mm) / (2 * step_px));
@@ -380,7 +387,7 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
       GazeFeatures plus = kept, minus = kept;
       (axis == 0 ? plus.glints[i].centre.u : plus.glints[i].centre.v) += step_px;
       (axis == 0 ? minus.glints[i].centre.u : minus.glints[i].centre.v) -= step_px;
-      ok = add(plus, minus, noise.glint_px);
+      ok = add(plus, minus, glint_sd(kept.glints[i], axis, noise));
     }
   }
   // The pupil moved as a whole: its centre and its outline together.
@@ -425,7 +432,9 @@ ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illu
   // The cornea first, from the glints (a conicoid's with the pupils' axes,
   // which the pupil's depth moves): its centres do not depend on kappa.
   std::vector<GlintObservation> glints;
-  for (std::size_t f = 0; f < frames.size(); ++f) add_observations(glints, frames[f].glints, static_cast<int>(f));
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    add_observations(glints, frames[f].glints, static_cast<int>(f), 0, settings.glint_sd_scale);
+  }
   CorneaFitSettings cornea_settings;
   cornea_settings.cornea_radius_mm = initial.cornea_radius_mm;
   cornea_settings.fit_radius = settings.fit_cornea_radius;
@@ -635,7 +644,7 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
         std::vector<GazeFeatures> plus = frames, minus = frames;
         (axis == 0 ? plus[f].glints[g].centre.u : plus[f].glints[g].centre.v) += step_px;
         (axis == 0 ? minus[f].glints[g].centre.u : minus[f].glints[g].centre.v) -= step_px;
-        ok = add(plus, minus, noise.glint_px);
+        ok = add(plus, minus, glint_sd(frames[f].glints[g], axis, noise));
       }
     }
     // The pupil moved as a whole: its centre and its outline together.

@@ -24,6 +24,9 @@ struct GlintObservation {
   int camera = 0;
   int light = 0;
   Pixel pixel;
+  // The pixel's standard deviation along u and v, px (a detector's own,
+  // see add_observations); 0: CorneaFitSettings::pixel_noise_px.
+  double sd_u_px = 0, sd_v_px = 0;
 };
 
 struct CorneaFitSettings {
@@ -38,13 +41,14 @@ struct CorneaFitSettings {
   // With fit_radius: > 0 adds a Gaussian prior on the radius at
   // cornea_radius_mm with this standard deviation; 0, none.
   double radius_prior_sd_mm = 0;
-  double pixel_noise_px = 0.1;  // standard deviation of a glint's u and v, > 0
+  double pixel_noise_px = 0.1;  // standard deviation of a glint's u and v where it has none of its own, > 0
   // An estimate whose standard deviation exceeds this is reported as
   // weakly determined (a warning); > 0.
   double max_sd_mm = 10;
-  // A glint whose residual exceeds this many pixel_noise_px is rejected
-  // and the fit run again, the worst first, while its frame keeps three
-  // or more (a glint merged with another bright spot); 0: none rejected.
+  // A glint whose residual exceeds this many of its standard deviations
+  // is rejected and the fit run again, the worst first, while its frame
+  // keeps three or more (a glint merged with another bright spot); 0:
+  // none rejected.
   double reject_beyond_sd = 6;
 };
 
@@ -53,14 +57,17 @@ struct CorneaFit {
   double cornea_radius_mm = 0;  // fitted, or the settings' when not fitted
   bool radius_fitted = false;
   // Row-major covariance of the unknowns: the frames' centres in order,
-  // then the radius when fitted; mm^2. sigma^2 (J^T J)^-1 with J the
-  // glints' pixels by the unknowns at the estimate. Empty when the glints
-  // do not determine them.
+  // then the radius when fitted; mm^2. (J^T J)^-1 with J the glints'
+  // pixels, each over its standard deviation, by the unknowns at the
+  // estimate. Empty when the glints do not determine them.
   std::vector<double> covariance_mm2;
   double rms_residual_px = 0;  // of the glints' pixels at the estimate
   // Each glint's distance from its prediction, in input order; a rejected
   // glint's from the fit it was rejected in.
   std::vector<double> glint_residuals_px;
+  // The same in each glint's own standard deviations: the hypotenuse of
+  // its u and v residuals, each over its s.d.
+  std::vector<double> glint_residuals_sd;
   double condition = 0;        // of J^T J (0 when not computed)
   int glints_used = 0;
   std::vector<int> rejected;  // indices into the glints given, in the order rejected
@@ -86,9 +93,13 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
                      const std::vector<UnitVector3>& optical_axes = {});
 
 // A detector's glints in one frame of one camera, those with their light
-// told (illuminator >= 0), appended to `out` as observations.
+// told (illuminator >= 0), appended to `out` as observations. With
+// glint_sd_scale > 0, a glint that reports its centre's standard
+// deviation (Glint::centre_sd_u_px, _v_px) is given it times the scale
+// (the detector's own, as measured against labels); the others are left
+// to the fit's pixel_noise_px.
 void add_observations(std::vector<GlintObservation>& out, const std::vector<Glint>& glints, int frame,
-                      int camera = 0);
+                      int camera = 0, double glint_sd_scale = 0);
 
 // One frame from one camera: a detector's glints with their light told
 // (illuminator >= 0; others are left out), `start` a guess of the centre

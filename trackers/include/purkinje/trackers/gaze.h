@@ -73,8 +73,13 @@ UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double kappa_horizo
 // The features' noise, for the uncertainty a gaze estimate reports:
 // standard deviations of each glint's and of the pupil's u and v.
 struct FeatureNoise {
-  double glint_px = 0.05;  // our detectors on the bundled scenes' renders: 0.035 and 0.062 px (docs/calibration.md)
+  double glint_px = 0.05;  // a glint's, where it has none of its own (below)
   double pupil_px = 0.05;
+  // > 0: a glint that reports its centre's standard deviation (a
+  // saturated glint of BlobGlintDetector) has that times this scale, the
+  // detector's own as measured against labels (add_observations); 0: all
+  // glints have glint_px.
+  double glint_sd_scale = 0;
 };
 
 struct ModelGaze {
@@ -132,6 +137,7 @@ struct ModelGazeCalibrationSettings {
   bool fit_pupil_depth = false;   // with kappa
   bool fit_cornea_radius = false;  // from all frames' glints together
   double pixel_noise_px = 0.1;    // of the glints, for the cornea fit's covariance
+  double glint_sd_scale = 0;      // as FeatureNoise's: > 0, the glints' own deviations times this
   // Given: the covariances of kappa (and the pupil's depth) and of the
   // centre of rotation by first-order propagation of this noise through
   // the whole calibration (central differences: two calibrations per

@@ -48,6 +48,7 @@ struct Frame {
   // glint's on the cornea, and the pupil ellipse's centre; and the errors
   // over their reported standard deviations, of the glints that report one.
   std::vector<double> glint_errors_px, pupil_errors_px, glint_errors_sd;
+  std::vector<double> glint_errors_without_sd_px;  // of the glints that report none
 };
 
 std::string format(double value, int digits = 4) {
@@ -90,6 +91,9 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
       if (g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0) {
         f.glint_errors_sd.push_back((g.centre.u - label.pixel.u) / g.centre_sd_u_px);
         f.glint_errors_sd.push_back((g.centre.v - label.pixel.v) / g.centre_sd_v_px);
+      } else {
+        f.glint_errors_without_sd_px.push_back(g.centre.u - label.pixel.u);
+        f.glint_errors_without_sd_px.push_back(g.centre.v - label.pixel.v);
       }
     }
   }
@@ -198,12 +202,19 @@ int run_calibrate(const CalibrateRequest& request) {
   std::uint64_t seed = request.seed;
   try {
     // The tracker knows its optics: a glint's spot is the camera's point
-    // spread at the eye's depth, which the glint detector need not guess.
+    // spread, which the glint detector need not guess, when it is the same
+    // wherever the head moves (no defocus) and the lights are points; else
+    // the detector estimates it from each frame's glints.
     trackers::BlobGlintSettings glint_settings;
     const double depth = (camera.camera_from_world() * nominal_cornea).z;
-    const renderer::PointSpread spread = renderer::point_spread(camera, depth);
-    glint_settings.spot_sigma_px = std::clamp(
-        std::sqrt(spread.sigma_px * spread.sigma_px + spread.defocus_radius_px * spread.defocus_radius_px / 4), 0.1, 10.0);
+    const bool points = std::all_of(rig.illuminators.begin(), rig.illuminators.end(),
+                                    [](const Illuminator& l) { return l.emitter_diameter_mm == 0; });
+    if (depth > camera.focal_length_mm() && points) {
+      const renderer::PointSpread spread = renderer::point_spread(camera, depth);
+      if (spread.defocus_radius_px == 0 && spread.sigma_px >= 0.1 && spread.sigma_px <= 10) {
+        glint_settings.spot_sigma_px = spread.sigma_px;
+      }
+    }
     spot_sigma_px = glint_settings.spot_sigma_px;
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
       calibration.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
@@ -241,9 +252,10 @@ int run_calibrate(const CalibrateRequest& request) {
               << calibration.size() << " calibration frames: at least 6 are needed\n";
     return kBadInput;
   }
-  // The detectors' noise: as given, or measured against the calibration
-  // frames' labels (a simulator knows them; a tracker on real images would
-  // take its detectors' specification). The RMS error, clipped as the
+  // The detectors' noise: as given, or measured against the noise frames'
+  // labels, or the calibration frames' without noise frames (a simulator
+  // knows them; a tracker on real images would take its detectors'
+  // specification). The RMS error, clipped as the
   // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
   // so that a merged glint does not inflate it.
   const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
@@ -277,7 +289,14 @@ int run_calibrate(const CalibrateRequest& request) {
   const bool own_glint_sd =
       !request.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(),
                                              [](const Frame& f) { return !f.glint_errors_sd.empty(); });
-  if (own_glint_sd) noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
+  if (own_glint_sd) {
+    noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
+    // glint_px then serves only the glints without their own, where there are any.
+    if (std::any_of(measured_on.begin(), measured_on.end(),
+                    [](const Frame& f) { return !f.glint_errors_without_sd_px.empty(); })) {
+      noise.glint_px = measured(&Frame::glint_errors_without_sd_px, std::nullopt, noise.glint_px);
+    }
+  }
   trackers::ModelGazeCalibrationSettings settings;
   settings.fit_cornea_radius = request.fit_radius;
   settings.fit_pupil_depth = request.fit_pupil_depth;
@@ -341,7 +360,11 @@ int run_calibrate(const CalibrateRequest& request) {
                                           ? std::string("measured on the calibration frames")
                                           : "measured on " + std::to_string(noise_frames.size()) + " noise frames";
     r.add("glint_noise_from", request.glint_noise_px ? std::string("given") : measured_from);
-    r.add("glint_spot_sigma", spot_sigma_px, "px");
+    if (spot_sigma_px > 0) {
+      r.add("glint_spot_sigma", spot_sigma_px, "px");
+    } else {
+      r.add("glint_spot_sigma", std::string("estimated per frame (defocus or sized lights)"));
+    }
     r.add("glint_sd_scale", noise.glint_sd_scale);
     r.add("glint_sd_from", own_glint_sd ? "the detector's, scaled as " + measured_from
                                         : std::string("none: every glint has glint_noise"));

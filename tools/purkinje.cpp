@@ -400,11 +400,11 @@ int run(int argc, char** argv) {
                       "Fit the pupil's depth behind the cornea's centre with kappa");
   calibrate->add_option("--glint-noise", calibrate_request.glint_noise_px,
                         "The glint detector's noise (s.d., px) the uncertainties assume\n"
-                        "(default: measured on the calibration frames against their labels)")
+                        "(default: measured against the noise frames' labels)")
       ->check(CLI::Range(1e-6, 10.0));
   calibrate->add_option("--pupil-noise", calibrate_request.pupil_noise_px,
                         "The pupil detector's noise (s.d., px) the uncertainties assume\n"
-                        "(default: measured on the calibration frames against their labels)")
+                        "(default: measured against the noise frames' labels)")
       ->check(CLI::Range(1e-6, 10.0));
   calibrate->add_option("--noise-frames", calibrate_request.noise_frames,
                         "Frames at random targets that only measure the detectors' noise (0: the calibration frames)")

@@ -338,12 +338,24 @@ TEST(CorneaFit, EachGlintsOwnDeviationWeighsIt) {
     const double sd = i == 2 ? 0.2 : 0.05;
     EXPECT_NEAR(less.glint_residuals_sd[i], less.glint_residuals_px[i] / sd, 1e-9) << i;
   }
-  // Rejection counts in the glint's own deviations: 0.2 px is 4 of 0.05
-  // but 1 of 0.2 px.
+  // Rejection counts in the glint's own deviations: 0.4 px is 8 of 0.05
+  // but 1 of 0.4 px; 0.03 px is 15 of 0.002 px, though under 3 of
+  // pixel_noise_px.
   CorneaFitSettings strict;
   strict.reject_beyond_sd = 3;
-  EXPECT_EQ(fit_cornea(scene.cameras, scene.illuminators, off, {truth}, strict).rejected, std::vector<int>{2});
-  EXPECT_TRUE(fit_cornea(scene.cameras, scene.illuminators, doubted, {truth}, strict).rejected.empty());
+  strict.pixel_noise_px = 0.05;
+  std::vector<GlintObservation> far_off = alike;
+  far_off[2].pixel.u += 0.4;
+  EXPECT_EQ(fit_cornea(scene.cameras, scene.illuminators, far_off, {truth}, strict).rejected, std::vector<int>{2});
+  far_off[2].sd_u_px = far_off[2].sd_v_px = 0.4;
+  EXPECT_TRUE(fit_cornea(scene.cameras, scene.illuminators, far_off, {truth}, strict).rejected.empty());
+  std::vector<GlintObservation> sure = alike;
+  for (GlintObservation& o : sure) o.sd_u_px = o.sd_v_px = 0.002;
+  sure[2].pixel.u += 0.03;
+  const CorneaFit sharp = fit_cornea(scene.cameras, scene.illuminators, sure, {truth}, strict);
+  EXPECT_EQ(sharp.rejected, std::vector<int>{2});
+  EXPECT_GT(sharp.glint_residuals_sd[2], 3);
+  EXPECT_LT(sharp.glint_residuals_px[2], 3 * strict.pixel_noise_px);
 
   // Bad deviations and scales are refused by name.
   std::vector<GlintObservation> bad = alike;

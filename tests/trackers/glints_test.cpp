@@ -157,7 +157,7 @@ TEST(BlobGlintDetector, ASaturatedSpotOnATexturedEdgeIsWithinItsReportedDeviatio
 // the background seen around each pixel then measures it.
 TEST(BlobGlintDetector, ASaturatedSpotsReportedDeviationIsItsScatterUnderNoise) {
   BlobGlintSettings settings;
-  settings.pixel_noise = 1e-4;
+  settings.flank_noise = 1e-4;
   const BlobGlintDetector detector(settings);
   const Spot spot{40.3, 29.6, 1200, 0.6};
   const int draws = 300;
@@ -317,12 +317,12 @@ TEST(BlobGlintDetector, RejectsSettingsOutOfRangeNamingThem) {
   }
   for (const double noise : {0.0, 1.0, std::nan("")}) {
     s = {};
-    s.pixel_noise = noise;
+    s.flank_noise = noise;
     try {
       BlobGlintDetector{s};
-      FAIL() << "pixel_noise " << noise << " was accepted";
+      FAIL() << "flank_noise " << noise << " was accepted";
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("pixel_noise"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("flank_noise"), std::string::npos) << e.what();
     }
   }
 }

@@ -298,6 +298,13 @@ CorneaAndAxes cornea_and_axes(const Camera& camera, const std::vector<Illuminato
   return out;
 }
 
+void check_glint_sd_scale(const std::string& name, double scale) {
+  if (!(scale >= 0 && std::isfinite(scale))) {
+    throw std::invalid_argument(name + " = " + std::to_string(scale) +
+                                ": must be finite and >= 0 (0: the glints' own deviations are not used)");
+  }
+}
+
 // A glint's standard deviation along u (axis 0) or v, as the observations
 // take it (add_observations).
 double glint_sd(const Glint& g, int axis, const FeatureNoise& noise) {
@@ -355,6 +362,7 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
                               const Point3& start, const std::optional<FeatureNoise>& given_noise) {
   const FeatureNoise noise = given_noise.value_or(FeatureNoise{});
+  check_glint_sd_scale("FeatureNoise::glint_sd_scale", noise.glint_sd_scale);
   std::vector<int> rejected;
   ModelGaze out =
       model_gaze(camera, lights, features, model, screen, start, noise, CorneaFitSettings{}.reject_beyond_sd, &rejected);
@@ -609,6 +617,13 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
                                           const std::vector<GazeFeatures>& frames,
                                           const std::vector<Point3>& targets, const GazeEyeModel& initial,
                                           const Point3& start, const ModelGazeCalibrationSettings& settings) {
+  check_glint_sd_scale("ModelGazeCalibrationSettings::glint_sd_scale", settings.glint_sd_scale);
+  if (settings.propagate_noise && settings.propagate_noise->glint_sd_scale != settings.glint_sd_scale) {
+    // The fit and the propagation must take the glints' noise alike.
+    throw std::invalid_argument("calibrate_model_gaze: glint_sd_scale = " + std::to_string(settings.glint_sd_scale) +
+                                " but propagate_noise's = " +
+                                std::to_string(settings.propagate_noise->glint_sd_scale) + ": must be the same");
+  }
   ModelGazeCalibration out = calibrate_once(camera, lights, frames, targets, initial, start, settings);
   if (!settings.propagate_noise || !out.converged || out.covariance.empty()) return out;
   // Each feature coordinate moved both ways by a small step, the whole

@@ -77,7 +77,7 @@ std::optional<SpotFit> fit_spot(const std::vector<SpotPixel>& pixels, const Pixe
   std::array<double, 4> x{start.u, start.v, start_energy, std::log(free_width ? 0.8 : sigma)};
   PixelShares along_u, along_v;
   const optimizer::ResidualFunction residuals = [&](const double* q, double* r, double* jacobian) {
-    if (!(std::abs(q[3]) < 3)) return false;  // a width between 0.05 and 20 px
+    if (free_width && !(std::abs(q[3]) < 3)) return false;  // a width between 0.05 and 20 px
     const double width = free_width ? std::exp(q[3]) : sigma;
     along_u.compute(u0, u1 - u0 + 1, q[0], width);
     along_v.compute(v0, v1 - v0 + 1, q[1], width);
@@ -113,13 +113,16 @@ std::optional<SpotFit> fit_spot(const std::vector<SpotPixel>& pixels, const Pixe
     }
   }
   cv::Mat covariance;
-  if (!(cv::invert(normal, covariance, cv::DECOMP_CHOLESKY) > 0)) return std::nullopt;
+  if (!(cv::invert(normal, covariance, cv::DECOMP_EIG) > 0)) return std::nullopt;
+  // A normal matrix near singular (few pixels weigh) gives no deviation to trust.
+  const double var_u = covariance.at<double>(0, 0), var_v = covariance.at<double>(1, 1);
+  if (!(var_u > 0 && var_v > 0 && std::isfinite(var_u) && std::isfinite(var_v))) return std::nullopt;
   SpotFit fit;
   fit.centre = {x[0], x[1]};
   fit.energy = x[2];
   fit.sigma = free_width ? std::exp(x[3]) : sigma;
-  fit.var_u = covariance.at<double>(0, 0);
-  fit.var_v = covariance.at<double>(1, 1);
+  fit.var_u = var_u;
+  fit.var_v = var_v;
   return fit;
 }
 
@@ -168,8 +171,8 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
   if (!(s.spot_sigma_px == 0 || (s.spot_sigma_px >= 0.1 && s.spot_sigma_px <= 10))) {
     fail("spot_sigma_px = " + std::to_string(s.spot_sigma_px) + ": must be 0 or in [0.1, 10]");
   }
-  if (!(s.pixel_noise > 0 && s.pixel_noise < 1)) {
-    fail("pixel_noise = " + std::to_string(s.pixel_noise) + ": must be in (0, 1)");
+  if (!(s.flank_noise > 0 && s.flank_noise < 1)) {
+    fail("flank_noise = " + std::to_string(s.flank_noise) + ": must be in (0, 1)");
   }
 }
 
@@ -204,7 +207,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
 
   std::vector<Glint> glints;
   std::vector<SaturatedSpot> spots;
-  const double pixel_noise = settings_.pixel_noise * top;
+  const double flank_noise = settings_.flank_noise * top;
   const int m = settings_.centroid_margin_px;
   for (int label = 1; label < count; ++label) {
     const int area = found[label].area;
@@ -309,7 +312,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
       SaturatedSpot spot{glints.size(), {}, sum, {}};
       const cv::Moments moments = cv::moments(core, true);
       spot.start = {window.x + moments.m10 / moments.m00, window.y + moments.m01 / moments.m00};
-      const cv::Mat own = labels(window);
+      const cv::Mat own = labels(window), local = grey(window);
       const cv::Mat ours = (own == 0) | (own == label);
       for (int flank = 0; flank < 2; ++flank) {
         // Where the background is unseen: the core, and the second time its
@@ -324,14 +327,14 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
             if (!fitted.at<std::uint8_t>(y, x) || !ours.at<std::uint8_t>(y, x)) continue;
             // The background under the pixel: the median of the nearest
             // five or more pixels seen (the smallest square about it that
-            // holds them), and their scatter (1.4826 x the median absolute
-            // deviation).
+            // holds them, or as many as the window has), and their scatter
+            // (1.4826 x the median absolute deviation).
             around.clear();
             for (int k = 1; k <= 2 * r && around.size() < 5; ++k) {
               around.clear();
               for (int yy = std::max(0, y - k); yy <= std::min(window.height - 1, y + k); ++yy) {
                 for (int xx = std::max(0, x - k); xx <= std::min(window.width - 1, x + k); ++xx) {
-                  if (seen.at<std::uint8_t>(yy, xx)) around.push_back(grey(window).at<float>(yy, xx));
+                  if (seen.at<std::uint8_t>(yy, xx)) around.push_back(local.at<float>(yy, xx));
                 }
               }
             }
@@ -342,9 +345,9 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
             for (float& a : around) a = std::abs(a - static_cast<float>(background));
             std::nth_element(around.begin(), middle, around.end());
             const double scatter = 1.4826 * *middle;
-            const double value = grey(window).at<float>(y, x);
+            const double value = local.at<float>(y, x);
             spot.pixels[flank].push_back({window.x + x, window.y + y, value - background, value >= top,
-                                          1 / std::hypot(pixel_noise, scatter)});
+                                          1 / std::hypot(flank_noise, scatter)});
           }
         }
       }
@@ -382,11 +385,10 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
       g.centre_sd_u_px = std::sqrt(0.5 * (near->var_u + far->var_u) + du * du);
       g.centre_sd_v_px = std::sqrt(0.5 * (near->var_v + far->var_v) + dv * dv);
     } else if (near || far) {
+      // One background alone does not bracket the unseen one: no deviation.
       const SpotFit& fit = near ? *near : *far;
       g.centre = fit.centre;
       g.energy_dn = fit.energy;
-      g.centre_sd_u_px = std::sqrt(fit.var_u);
-      g.centre_sd_v_px = std::sqrt(fit.var_v);
     }
   }
   std::sort(glints.begin(), glints.end(), [](const Glint& a, const Glint& b) { return a.energy_dn > b.energy_dn; });

@@ -47,8 +47,8 @@ struct CorneaFitSettings {
   double max_sd_mm = 10;
   // A glint whose residual exceeds this many of its standard deviations
   // is rejected and the fit run again, the worst first, while its frame
-  // keeps three or more (a glint merged with another bright spot); 0:
-  // none rejected.
+  // keeps three or more (a glint merged with another bright spot, or one
+  // whose small reported deviation misses an error); 0: none rejected.
   double reject_beyond_sd = 6;
 };
 

@@ -74,7 +74,7 @@ struct BlobGlintSettings {
   // deviation. 3 DN on 8 bits: the bundled sensors' shot noise on a flank
   // is 2 to 2.5 DN, and 3 DN makes the reported deviations match the
   // errors on their renders (docs/trackers.md).
-  double pixel_noise = 0.012;
+  double flank_noise = 0.012;
 };
 
 class BlobGlintDetector final : public GlintDetector {

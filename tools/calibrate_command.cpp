@@ -259,13 +259,12 @@ int run_calibrate(const CalibrateRequest& request) {
   // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
   // so that a merged glint does not inflate it.
   const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
+  const std::vector<Frame>& measured_on = noise_frames.empty() ? calibration : noise_frames;
   const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given,
                             double fallback) {
     if (given) return *given;
     std::vector<double> all;
-    for (const Frame& f : noise_frames.empty() ? calibration : noise_frames) {
-      all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
-    }
+    for (const Frame& f : measured_on) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
     double sd = INFINITY;
     for (int round = 0; round < 20; ++round) {
       double sum = 0;
@@ -285,7 +284,6 @@ int run_calibrate(const CalibrateRequest& request) {
   // Glints that report their own standard deviation (saturated ones) keep
   // it, scaled by the RMS of their errors over it, measured the same way;
   // a given --glint-noise serves every glint.
-  const std::vector<Frame>& measured_on = noise_frames.empty() ? calibration : noise_frames;
   const bool own_glint_sd =
       !request.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(),
                                              [](const Frame& f) { return !f.glint_errors_sd.empty(); });

@@ -403,20 +403,23 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
   }
 }
 
-void add_observations(std::vector<GlintObservation>& out, const std::vector<Glint>& glints, int frame,
-                      int camera, double glint_sd_scale) {
+GlintObservation observation_of(const Glint& glint, int frame, int camera, double glint_sd_scale) {
   if (!(glint_sd_scale >= 0 && std::isfinite(glint_sd_scale))) {
-    throw std::invalid_argument("add_observations: glint_sd_scale = " + number(glint_sd_scale) +
+    throw std::invalid_argument("glint_sd_scale = " + number(glint_sd_scale) +
                                 ": must be finite and >= 0 (0: the glints' own deviations are not used)");
   }
+  GlintObservation o{frame, camera, glint.illuminator, glint.centre};
+  if (glint_sd_scale > 0 && glint.centre_sd_u_px > 0 && glint.centre_sd_v_px > 0) {
+    o.sd_u_px = glint_sd_scale * glint.centre_sd_u_px;
+    o.sd_v_px = glint_sd_scale * glint.centre_sd_v_px;
+  }
+  return o;
+}
+
+void add_observations(std::vector<GlintObservation>& out, const std::vector<Glint>& glints, int frame,
+                      int camera, double glint_sd_scale) {
   for (const Glint& g : glints) {
-    if (g.illuminator < 0) continue;
-    GlintObservation o{frame, camera, g.illuminator, g.centre};
-    if (glint_sd_scale > 0 && g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0) {
-      o.sd_u_px = glint_sd_scale * g.centre_sd_u_px;
-      o.sd_v_px = glint_sd_scale * g.centre_sd_v_px;
-    }
-    out.push_back(o);
+    if (g.illuminator >= 0) out.push_back(observation_of(g, frame, camera, glint_sd_scale));
   }
 }
 

@@ -305,12 +305,12 @@ void check_glint_sd_scale(const std::string& name, double scale) {
   }
 }
 
-// A glint's standard deviation along u (axis 0) or v, as the observations
-// take it (add_observations).
+// A glint's standard deviation along u (axis 0) or v, as the cornea fit
+// takes it: its observation's own, or glint_px.
 double glint_sd(const Glint& g, int axis, const FeatureNoise& noise) {
-  const double own = axis == 0 ? g.centre_sd_u_px : g.centre_sd_v_px;
-  return noise.glint_sd_scale > 0 && g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0 ? noise.glint_sd_scale * own
-                                                                                 : noise.glint_px;
+  const GlintObservation o = observation_of(g, 0, 0, noise.glint_sd_scale);
+  const double own = axis == 0 ? o.sd_u_px : o.sd_v_px;
+  return own > 0 ? own : noise.glint_px;
 }
 
 // The estimate without its uncertainty.

@@ -92,8 +92,15 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
                      const CorneaFitSettings& settings = {},
                      const std::vector<UnitVector3>& optical_axes = {});
 
+// One glint as an observation. With glint_sd_scale > 0, a glint that
+// reports its centre's standard deviation (Glint::centre_sd_u_px, _v_px)
+// is given it times the scale; otherwise its deviations stay 0 (the fit's
+// pixel_noise_px). Throws std::invalid_argument for a scale not finite
+// and >= 0.
+GlintObservation observation_of(const Glint& glint, int frame, int camera = 0, double glint_sd_scale = 0);
+
 // A detector's glints in one frame of one camera, those with their light
-// told (illuminator >= 0), appended to `out` as observations. With
+// told (illuminator >= 0), appended to `out` as observations (observation_of). With
 // glint_sd_scale > 0, a glint that reports its centre's standard
 // deviation (Glint::centre_sd_u_px, _v_px) is given it times the scale
 // (the detector's own, as measured against labels); the others are left

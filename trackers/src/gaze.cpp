@@ -366,11 +366,14 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
   std::vector<int> rejected;
   ModelGaze out =
       model_gaze(camera, lights, features, model, screen, start, noise, CorneaFitSettings{}.reject_beyond_sd, &rejected);
-  if (!given_noise || !out.valid || !out.on_screen) return out;
-  // Each feature coordinate moved both ways by a small step; the screen
-  // point's changes give the Jacobian, and its covariance follows. The
-  // glints the estimate rejected stay out, and no more are rejected: a
-  // glint near the bound must not flip between the two sides.
+  if (!given_noise || !out.valid) return out;
+  // Each feature coordinate moved both ways by a small step; the cornea's
+  // centre's and the screen point's changes give the Jacobians, and their
+  // covariances follow. A conicoid's centre moves with the pupil too,
+  // through the axis its glints are fitted about, which the glint fit's
+  // own covariance holds fixed. The glints the estimate rejected stay
+  // out, and no more are rejected: a glint near the bound must not flip
+  // between the two sides.
   GazeFeatures kept = features;
   int told = 0;
   for (Glint& g : kept.glints) {
@@ -378,10 +381,16 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
     if (std::find(rejected.begin(), rejected.end(), told++) != rejected.end()) g.illuminator = -1;
   }
   constexpr double step_px = 1e-3;
+  Eigen::Matrix3d cornea_covariance = Eigen::Matrix3d::Zero();
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
   const auto add = [&](GazeFeatures moved_plus, GazeFeatures moved_minus, double sd_px) {
     const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise, 0);
     const ModelGaze minus = model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise, 0);
+    if (!plus.valid || !minus.valid) return false;
+    const Vector3 moved = (plus.cornea_center - minus.cornea_center) / (2 * step_px);
+    const Eigen::Vector3d centre_column(moved.x, moved.y, moved.z);
+    cornea_covariance += sd_px * sd_px * centre_column * centre_column.transpose();
+    if (!out.on_screen) return true;
     if (!plus.on_screen || !minus.on_screen) return false;
     const Eigen::Vector2d column((plus.on_screen->x_mm - minus.on_screen->x_mm) / (2 * step_px),
                                  (plus.on_screen->y_mm - minus.on_screen->y_mm) / (2 * step_px));
@@ -413,8 +422,13 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
     out.warnings.push_back("no uncertainty: the estimate fails for features a thousandth of a pixel away");
     return out;
   }
-  out.on_screen_covariance_mm2 = std::array<double, 4>{covariance(0, 0), covariance(0, 1), covariance(1, 0),
-                                                       covariance(1, 1)};
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) out.cornea_covariance_mm2[3 * a + b] = cornea_covariance(a, b);
+  }
+  if (out.on_screen) {
+    out.on_screen_covariance_mm2 = std::array<double, 4>{covariance(0, 0), covariance(0, 1), covariance(1, 0),
+                                                         covariance(1, 1)};
+  }
   return out;
 }
 

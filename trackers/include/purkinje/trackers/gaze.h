@@ -87,7 +87,11 @@ struct ModelGaze {
   // false: cornea_center is no estimate to use (the fit's start, or a
   // conicoid's centre that did not settle with the pupil's axis)
   bool cornea_determined = false;
-  // Row-major, mm^2, of the cornea's centre from the glints' noise.
+  // Row-major, mm^2, of the cornea's centre. With the noise given, from
+  // all the features' by the same propagation as on_screen's: a conicoid's
+  // centre moves with the pupil's noise too, through the axis its glints
+  // are fitted about. Without (or where that propagation fails), the glint
+  // fit's own, from the glints' noise about a fixed axis.
   std::array<double, 9> cornea_covariance_mm2{};
   Point3 pupil_center;
   UnitVector3 optical_axis = UnitVector3::unit_z();

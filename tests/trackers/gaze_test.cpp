@@ -388,6 +388,7 @@ TEST(ModelGaze, AConicoidsCentreUncertaintyCarriesThePupilsNoise) {
   const ModelGaze glints_only =
       estimate_model_gaze(camera, s.rig.illuminators, exact, model, s.screen, s.home, FeatureNoise{0.005, 1e-9});
   ASSERT_TRUE(reported.cornea_determined && glints_only.cornea_determined);
+  ASSERT_TRUE(reported.on_screen_covariance_mm2 && glints_only.on_screen_covariance_mm2);  // propagated
   std::mt19937 random(11);
   std::normal_distribution<double> glint(0, noise.glint_px), pupil(0, noise.pupil_px);
   const int draws = statistics_draws();

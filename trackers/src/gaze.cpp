@@ -383,6 +383,9 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
   constexpr double step_px = 1e-3;
   Eigen::Matrix3d cornea_covariance = Eigen::Matrix3d::Zero();
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
+  // A moved feature that takes the gaze off the screen costs the screen
+  // point's covariance only: the cornea's columns stand.
+  bool screen_ok = out.on_screen.has_value();
   const auto add = [&](GazeFeatures moved_plus, GazeFeatures moved_minus, double sd_px) {
     const ModelGaze plus = model_gaze(camera, lights, moved_plus, model, screen, out.cornea_center, noise, 0);
     const ModelGaze minus = model_gaze(camera, lights, moved_minus, model, screen, out.cornea_center, noise, 0);
@@ -390,8 +393,11 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
     const Vector3 moved = (plus.cornea_center - minus.cornea_center) / (2 * step_px);
     const Eigen::Vector3d centre_column(moved.x, moved.y, moved.z);
     cornea_covariance += sd_px * sd_px * centre_column * centre_column.transpose();
-    if (!out.on_screen) return true;
-    if (!plus.on_screen || !minus.on_screen) return false;
+    if (!screen_ok) return true;
+    if (!plus.on_screen || !minus.on_screen) {
+      screen_ok = false;
+      return true;
+    }
     const Eigen::Vector2d column((plus.on_screen->x_mm - minus.on_screen->x_mm) / (2 * step_px),
                                  (plus.on_screen->y_mm - minus.on_screen->y_mm) / (2 * step_px));
     covariance += sd_px * sd_px * column * column.transpose();
@@ -419,13 +425,18 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
     ok = add(plus, minus, noise.pupil_px);
   }
   if (!ok) {
-    out.warnings.push_back("no uncertainty: the estimate fails for features a thousandth of a pixel away");
+    out.warnings.push_back(
+        "no propagated uncertainty: the estimate fails for features a thousandth of a pixel away (the cornea's "
+        "covariance is the glint fit's, about a fixed axis)");
     return out;
   }
   for (int a = 0; a < 3; ++a) {
     for (int b = 0; b < 3; ++b) out.cornea_covariance_mm2[3 * a + b] = cornea_covariance(a, b);
   }
-  if (out.on_screen) {
+  if (out.on_screen && !screen_ok) {
+    out.warnings.push_back("no screen uncertainty: the gaze leaves the screen for features a thousandth of a pixel away");
+  }
+  if (screen_ok) {
     out.on_screen_covariance_mm2 = std::array<double, 4>{covariance(0, 0), covariance(0, 1), covariance(1, 0),
                                                          covariance(1, 1)};
   }

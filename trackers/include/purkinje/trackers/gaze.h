@@ -87,11 +87,12 @@ struct ModelGaze {
   // false: cornea_center is no estimate to use (the fit's start, or a
   // conicoid's centre that did not settle with the pupil's axis)
   bool cornea_determined = false;
-  // Row-major, mm^2, of the cornea's centre. With the noise given, from
-  // all the features' by the same propagation as on_screen's: a conicoid's
-  // centre moves with the pupil's noise too, through the axis its glints
-  // are fitted about. Without (or where that propagation fails), the glint
-  // fit's own, from the glints' noise about a fixed axis.
+  // Row-major, mm^2, of the cornea's centre. With the noise given and the
+  // estimate valid, from all the features' by the same propagation as
+  // on_screen's: a conicoid's centre moves with the pupil's noise too,
+  // through the axis its glints are fitted about. Otherwise (no noise, no
+  // valid estimate, or a failed propagation) the glint fit's own, from the
+  // glints' noise about a fixed axis.
   std::array<double, 9> cornea_covariance_mm2{};
   Point3 pupil_center;
   UnitVector3 optical_axis = UnitVector3::unit_z();
@@ -128,11 +129,14 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
                                                            const GazeEyeModel& model,
                                                            const std::optional<UnitVector3>& start = std::nullopt);
 
-// The whole model-based estimate for one frame, with the screen point's
-// uncertainty when `noise` is given (it costs an estimate per feature
-// coordinate, both ways). `start`: a guess of the cornea's centre for the
-// glint fit. The cornea's covariance assumes the given glint noise, or
-// FeatureNoise's default.
+// The whole model-based estimate for one frame. `start`: a guess of the
+// cornea's centre for the glint fit. With `noise` given (it costs an
+// estimate per feature coordinate, both ways), the cornea's covariance and
+// the screen point's are propagated from all the features; the cornea's
+// even when the gaze misses the screen. Without, or where the estimate
+// itself is not valid (the pupil's ray misses the model), the cornea's
+// covariance is the glint fit's, about a fixed axis, from FeatureNoise's
+// default glint noise; a warning says when propagation failed.
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
                               const Point3& start, const std::optional<FeatureNoise>& noise = std::nullopt);

@@ -85,6 +85,13 @@ double error_deg(const GazeRig& s, const Point3& center, const ScreenPoint& targ
   return angle_between(s.screen.at(estimate) - c, s.screen.at(target) - c) / kDeg;
 }
 
+// The sample standard deviation of `draws` values from their sum and sum
+// of squares.
+double sample_sd(double sum, double sum_of_squares, int draws) {
+  const double mean = sum / draws;
+  return std::sqrt((sum_of_squares - draws * mean * mean) / (draws - 1));
+}
+
 struct Errors {
   double mean_deg = 0, max_deg = 0;
   int missing = 0;
@@ -362,8 +369,7 @@ TEST(ModelGaze, ReportedUncertaintyMatchesTheScatterUnderFeatureNoise) {
     }
   }
   for (int k = 0; k < 2; ++k) {
-    const double mean = sum[k] / draws;
-    const double sd_seen = std::sqrt((sum2[k] - draws * mean * mean) / (draws - 1));
+    const double sd_seen = sample_sd(sum[k], sum2[k], draws);
     EXPECT_NEAR(sd_seen / std::sqrt(reported[k]), 1, 0.2) << k;
     EXPECT_NEAR(sd_seen / std::sqrt((*at_truth.on_screen_covariance_mm2)[3 * k]), 1, 0.2) << k;
     char text[64];
@@ -407,8 +413,7 @@ TEST(ModelGaze, AConicoidsCentreUncertaintyCarriesThePupilsNoise) {
   }
   double most_missed = 0;
   for (int k = 0; k < 3; ++k) {
-    const double mean = sum[k] / draws;
-    const double sd_seen = std::sqrt((sum2[k] - draws * mean * mean) / (draws - 1));
+    const double sd_seen = sample_sd(sum[k], sum2[k], draws);
     EXPECT_NEAR(sd_seen / std::sqrt(reported.cornea_covariance_mm2[4 * k]), 1, 0.2) << k;
     most_missed = std::max(most_missed, sd_seen / std::sqrt(glints_only.cornea_covariance_mm2[4 * k]));
     char text[64];
@@ -510,8 +515,7 @@ TEST(ModelGaze, CalibrationUncertaintyMatchesTheScatterOfKappaAndTheRotationCent
   }
   const char* names[5] = {"kappa_h", "kappa_v", "rotation_x", "rotation_y", "rotation_z"};
   for (int k = 0; k < 5; ++k) {
-    const double mean = sum[k] / draws;
-    const double seen = std::sqrt((sum2[k] - draws * mean * mean) / (draws - 1));
+    const double seen = sample_sd(sum[k], sum2[k], draws);
     EXPECT_NEAR(seen / reported[k], 1, 0.2) << names[k] << ": seen " << seen << ", reported " << reported[k];
     char text[64];
     std::snprintf(text, sizeof text, "%.3g (reported %.3g)", seen, reported[k]);

@@ -216,6 +216,10 @@ int run_calibrate(const CalibrateRequest& request) {
       }
     }
     spot_sigma_px = glint_settings.spot_sigma_px;
+    // And its sensor's noise, which weighs a saturated glint's pixels.
+    const Sensor& sensor = camera.sensor();
+    if (sensor.gain > 0) glint_settings.full_scale_e = sensor.full_well_e / sensor.gain;
+    glint_settings.read_noise_e = sensor.read_noise_e;
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
       calibration.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
     }

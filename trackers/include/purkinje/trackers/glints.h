@@ -68,13 +68,15 @@ struct BlobGlintSettings {
   // camera's point spread, when the tracker knows it), or 0: the median of
   // the frame's saturated glints' own fits. 0 or in [0.1, 10].
   double spot_sigma_px = 0;
-  // The noise of a pixel on a glint's flank, a fraction of full scale, in
-  // (0, 1): with the scatter of the background seen around it, what
-  // weighs each pixel in the spot fit, and so the centre's standard
-  // deviation. 3 DN on 8 bits: the bundled sensors' shot noise on a flank
-  // is 2 to 2.5 DN, and 3 DN makes the reported deviations match the
-  // errors on their renders (docs/trackers.md).
-  double flank_noise = 0.012;
+  // The sensor's noise, in electrons: with the scatter of the background
+  // seen around it (less that background's own noise: the texture
+  // beneath), what weighs each pixel in a saturated glint's spot fit, and
+  // so the centre's standard deviation. A pixel of v DN holds
+  // v x full_scale_e / (2^bits - 1) electrons: its shot noise, the read
+  // noise and the rounding's 1/12 DN^2. The defaults are the bundled
+  // sensors' (a 10000 e- full well at unit gain, 4 e- read noise).
+  double full_scale_e = 10000;  // electrons at the image's largest value (full well / gain), > 0
+  double read_noise_e = 4;      // RMS, >= 0
 };
 
 class BlobGlintDetector final : public GlintDetector {

@@ -34,6 +34,20 @@ struct SpotPixel {
   std::array<double, 6> by_edge{};
 };
 
+// (J^T J)^-1 for a row-major Jacobian of `n` columns: a least-squares
+// fit's covariance in units of its residuals. nullopt when J^T J is singular.
+std::optional<cv::Mat> inverse_normal(const std::vector<double>& jacobian, int n) {
+  cv::Mat normal = cv::Mat::zeros(n, n, CV_64F);
+  for (std::size_t row = 0; row < jacobian.size(); row += n) {
+    for (int a = 0; a < n; ++a) {
+      for (int b = 0; b < n; ++b) normal.at<double>(a, b) += jacobian[row + a] * jacobian[row + b];
+    }
+  }
+  cv::Mat inverse;
+  if (!(cv::invert(normal, inverse, cv::DECOMP_EIG) > 0)) return std::nullopt;
+  return inverse;
+}
+
 // The pupil's edge across a spot's surroundings: brightness
 // low + (high - low) Phi(f / blur), f the signed distance from a line
 // (normal at `angle`, `offset` px from the spot's start) bent by
@@ -134,15 +148,9 @@ std::optional<PupilEdge> find_pupil_edge(const std::vector<std::array<double, 3>
   // Where the step is too weak to tell from the scatter, or runs clear of
   // the spot, the seen pixels' median serves.
   if (!(best.x[1] - best.x[0] > 4 * scatter) || !(std::abs(best.x[3]) < reach)) return std::nullopt;
-  cv::Mat normal = cv::Mat::zeros(6, 6, CV_64F);
-  for (int i = 0; i < count; ++i) {
-    for (int a = 0; a < 6; ++a) {
-      for (int b = 0; b < 6; ++b) normal.at<double>(a, b) += jacobian[6 * i + a] * jacobian[6 * i + b];
-    }
-  }
-  cv::Mat covariance;
-  if (!(cv::invert(normal, covariance, cv::DECOMP_EIG) > 0)) return std::nullopt;
-  for (int a = 0; a < 36; ++a) best.covariance[a] = covariance.at<double>(a / 6, a % 6) * scatter * scatter;
+  const std::optional<cv::Mat> covariance = inverse_normal(jacobian, 6);
+  if (!covariance) return std::nullopt;
+  for (int a = 0; a < 36; ++a) best.covariance[a] = covariance->at<double>(a / 6, a % 6) * scatter * scatter;
   return best;
 }
 
@@ -225,22 +233,18 @@ std::optional<SpotFit> fit_spot(const std::vector<SpotPixel>& pixels, const Pixe
   // reported s.d. off; 3.7 at most without).
   std::vector<double> r(pixels.size()), jacobian(pixels.size() * n);
   if (!residuals(x.data(), r.data(), jacobian.data())) return std::nullopt;
-  cv::Mat normal = cv::Mat::zeros(n, n, CV_64F);
   for (std::size_t i = 0; i < pixels.size(); ++i) {
-    if (pixels[i].at_least) continue;
-    for (int a = 0; a < n; ++a) {
-      for (int b = 0; b < n; ++b) normal.at<double>(a, b) += jacobian[n * i + a] * jacobian[n * i + b];
-    }
+    if (pixels[i].at_least) std::fill_n(jacobian.begin() + n * i, n, 0.0);
   }
-  cv::Mat covariance;
-  if (!(cv::invert(normal, covariance, cv::DECOMP_EIG) > 0)) return std::nullopt;
+  const std::optional<cv::Mat> inverse = inverse_normal(jacobian, n);
+  if (!inverse) return std::nullopt;
+  const cv::Mat& covariance = *inverse;
   // A normal matrix near singular (few pixels weigh) gives no deviation to trust.
   double var_u = covariance.at<double>(0, 0), var_v = covariance.at<double>(1, 1);
   if (edge) {
     // The edge's own uncertainty moves every pixel's background together.
     std::array<double, 6> along_u{}, along_v{};
-    for (std::size_t i = 0; i < pixels.size(); ++i) {
-      if (pixels[i].at_least) continue;
+    for (std::size_t i = 0; i < pixels.size(); ++i) {  // a clipped pixel's row is zero: it moves nothing
       double hu = 0, hv = 0;  // the centre's move per unit of the pixel's value
       for (int a = 0; a < n; ++a) {
         hu += covariance.at<double>(0, a) * jacobian[n * i + a];
@@ -474,10 +478,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
         // Beyond the flank, the pupil's edge where one crosses: the
         // background is then the edge's brightness plus the median of the
         // seen pixels' departures from it (the iris's texture).
-        std::optional<PupilEdge> edge;
         const double su = spot.start.u - window.x, sv = spot.start.v - window.y;
-        std::vector<std::array<double, 6>> edge_by(window.area());
-        cv::Mat departure = local.clone();
         if (flank == 1) {
           std::vector<std::array<double, 3>> seen_pixels;
           for (int y = 0; y < window.height; ++y) {
@@ -485,13 +486,18 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
               if (seen.at<std::uint8_t>(y, x)) seen_pixels.push_back({x - su, y - sv, local.at<float>(y, x)});
             }
           }
-          edge = find_pupil_edge(seen_pixels, r - 1.0);
-          if (edge) {
-            spot.edge = edge;
-            for (int y = 0; y < window.height; ++y) {
-              for (int x = 0; x < window.width; ++x) {
-                departure.at<float>(y, x) -= static_cast<float>(edge->at(x - su, y - sv, edge_by[y * window.width + x].data()));
-              }
+          spot.edge = find_pupil_edge(seen_pixels, r - 1.0);
+        }
+        const PupilEdge* edge = flank == 1 && spot.edge ? &*spot.edge : nullptr;
+        // Without an edge the departures are the pixels themselves.
+        cv::Mat departure = local;
+        std::vector<std::array<double, 6>> edge_by;  // per window pixel, where there is an edge
+        if (edge) {
+          departure = local.clone();
+          edge_by.resize(window.area());
+          for (int y = 0; y < window.height; ++y) {
+            for (int x = 0; x < window.width; ++x) {
+              departure.at<float>(y, x) -= static_cast<float>(edge->at(x - su, y - sv, edge_by[y * window.width + x].data()));
             }
           }
         }
@@ -512,7 +518,9 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
                 for (int xx = std::max(0, x - k); xx <= std::min(window.width - 1, x + k); ++xx) {
                   if (!seen.at<std::uint8_t>(yy, xx)) continue;
                   around.push_back(departure.at<float>(yy, xx));
-                  for (int a = 0; a < 6; ++a) moved[a] += edge_by[yy * window.width + xx][a];
+                  if (edge) {
+                    for (int a = 0; a < 6; ++a) moved[a] += edge_by[yy * window.width + xx][a];
+                  }
                 }
               }
             }
@@ -560,7 +568,8 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
   for (const SaturatedSpot& spot : spots) {
     // Without a width (no spot could be fitted), each spot fits its own.
     const auto near = fit_spot(spot.pixels[0], spot.start, spot.start_energy, sigma);
-    const auto far = fit_spot(spot.pixels[1], spot.start, spot.start_energy, sigma, spot.edge ? &*spot.edge : nullptr);
+    const auto far =
+        fit_spot(spot.pixels[1], spot.start, spot.start_energy, sigma, spot.edge ? &*spot.edge : nullptr);
     Glint& g = glints[spot.glint];
     if (near && far) {
       // The unseen background lies between the two estimates: the mean of

@@ -19,10 +19,10 @@
 #include <vector>
 
 #include "commands.h"
+#include "tracker_optics.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
-#include "purkinje/renderer/sensor_model.h"
 #include "purkinje/trackers/cornea.h"
 #include "purkinje/trackers/gaze.h"
 #include "purkinje/trackers/glints.h"
@@ -201,25 +201,9 @@ int run_calibrate(const CalibrateRequest& request) {
   double spot_sigma_px = 0;
   std::uint64_t seed = request.seed;
   try {
-    // The tracker knows its optics: a glint's spot is the camera's point
-    // spread, which the glint detector need not guess, when it is the same
-    // wherever the head moves (no defocus) and the lights are points; else
-    // the detector estimates it from each frame's glints.
-    trackers::BlobGlintSettings glint_settings;
-    const double depth = (camera.camera_from_world() * nominal_cornea).z;
-    const bool points = std::all_of(rig.illuminators.begin(), rig.illuminators.end(),
-                                    [](const Illuminator& l) { return l.emitter_diameter_mm == 0; });
-    if (depth > camera.focal_length_mm() && points) {
-      const renderer::PointSpread spread = renderer::point_spread(camera, depth);
-      if (spread.defocus_radius_px == 0 && spread.sigma_px >= 0.1 && spread.sigma_px <= 10) {
-        glint_settings.spot_sigma_px = spread.sigma_px;
-      }
-    }
+    // The tracker knows its optics: the spot's width and the sensor's noise.
+    const trackers::BlobGlintSettings glint_settings = glint_settings_for(camera, rig.illuminators, nominal_cornea);
     spot_sigma_px = glint_settings.spot_sigma_px;
-    // And its sensor's noise, which weighs a saturated glint's pixels.
-    const Sensor& sensor = camera.sensor();
-    if (sensor.gain > 0) glint_settings.full_scale_e = sensor.full_well_e / sensor.gain;
-    glint_settings.read_noise_e = sensor.read_noise_e;
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
       calibration.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
     }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "tracker_optics.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/trackers/detections_file.h"
@@ -141,18 +142,23 @@ int run_track(const TrackRequest& request) {
     std::cerr << "purkinje track: error: " << error.what() << "\n";
     return kBadInput;
   }
-  const trackers::BlobGlintDetector glint_detector;
+  const trackers::BlobGlintDetector default_glint_detector;
   const trackers::StarburstPupilDetector pupil_detector;
   trackers::Scorer scorer({request.match_radius_px});
   std::map<std::string, trackers::Detections> detections;
-  std::map<int, std::vector<std::optional<Pixel>>> layouts;  // by camera
+  // Per camera of the rig: which light makes which glint (where its lights
+  // would put them on the rig's nominal eye), and a glint detector told
+  // the camera's optics.
+  struct CameraTracker {
+    std::vector<std::optional<Pixel>> layout;
+    trackers::BlobGlintDetector glint_detector;
+  };
+  std::map<int, CameraTracker> trackers_by_camera;
   double seconds = 0;
   try {
     for (const LabelledImage& image : images) {
       const trackers::GreyImage pixels = read_image(image);
-      // Which light made which glint, from where the rig's lights would put
-      // them on its nominal eye.
-      const std::vector<std::optional<Pixel>>* layout = nullptr;
+      const CameraTracker* tracker = nullptr;
       if (rig && !image.labels.views.empty()) {
         const int camera = image.labels.views.front().camera;
         if (camera >= static_cast<int>(rig->cameras.size()) || rig->eyes.empty() ||
@@ -160,17 +166,22 @@ int run_track(const TrackRequest& request) {
           throw std::runtime_error(image.labels.image.string() + ": its labels' camera " + std::to_string(camera) +
                                    " and lights do not match " + request.scene_file);
         }
-        auto it = layouts.find(camera);
-        if (it == layouts.end()) {
-          it = layouts.emplace(camera, trackers::nominal_glint_layout(rig->cameras[camera], rig->illuminators,
-                                                                      rig->eyes.front())).first;
+        auto it = trackers_by_camera.find(camera);
+        if (it == trackers_by_camera.end()) {
+          const Camera& c = rig->cameras[camera];
+          const Eye& eye = rig->eyes.front();
+          it = trackers_by_camera
+                   .emplace(camera, CameraTracker{trackers::nominal_glint_layout(c, rig->illuminators, eye),
+                                                  trackers::BlobGlintDetector(glint_settings_for(
+                                                      c, rig->illuminators, eye.cornea_center()))})
+                   .first;
         }
-        layout = &it->second;
+        tracker = &it->second;
       }
       const auto start = std::chrono::steady_clock::now();
       trackers::Detections found;
-      found.glints = glint_detector.detect(pixels.view());
-      if (layout) trackers::identify_glints(found.glints, *layout);
+      found.glints = (tracker ? tracker->glint_detector : default_glint_detector).detect(pixels.view());
+      if (tracker) trackers::identify_glints(found.glints, tracker->layout);
       if (const auto pupil = pupil_detector.detect(pixels.view(), found.glints)) {
         found.pupils.push_back({pupil->ellipse.center, pupil->ellipse, pupil->confidence});
       }

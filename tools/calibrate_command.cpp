@@ -286,9 +286,8 @@ int run_calibrate(const CalibrateRequest& request) {
   trackers::ModelGazeCalibrationSettings settings;
   settings.fit_cornea_radius = request.fit_radius;
   settings.fit_pupil_depth = request.fit_pupil_depth;
-  settings.pixel_noise_px = noise.glint_px;
-  settings.glint_sd_scale = noise.glint_sd_scale;
-  settings.propagate_noise = noise;
+  settings.noise = noise;
+  settings.propagate_noise = true;
   trackers::ModelGazeCalibration model;
   std::optional<trackers::PolynomialGaze> polynomial;
   try {

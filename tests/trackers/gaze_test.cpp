@@ -463,9 +463,9 @@ TEST(ModelGaze, GlintsOwnDeviationsCarryIntoTheReportedUncertainty) {
     targets.push_back(s.screen.at(t));
   }
   ModelGazeCalibrationSettings plain, with_own;
-  plain.propagate_noise = common;
-  with_own.propagate_noise = scaled;
-  with_own.glint_sd_scale = scaled.glint_sd_scale;
+  plain.noise = common;
+  with_own.noise = scaled;
+  plain.propagate_noise = with_own.propagate_noise = true;
   const ModelGazeCalibration c1 = calibrate_model_gaze(camera, s.rig.illuminators, frames, targets, model, s.home, plain);
   const ModelGazeCalibration c2 =
       calibrate_model_gaze(camera, s.rig.illuminators, frames, targets, model, s.home, with_own);
@@ -489,7 +489,8 @@ TEST(ModelGaze, CalibrationUncertaintyMatchesTheScatterOfKappaAndTheRotationCent
   }
   const FeatureNoise noise{0.1, 0.05};
   ModelGazeCalibrationSettings propagate;
-  propagate.propagate_noise = noise;
+  propagate.noise = noise;
+  propagate.propagate_noise = true;
   const ModelGazeCalibration at_truth =
       calibrate_model_gaze(s.rig.cameras[0], s.rig.illuminators, exact, targets, s.tracker_eye(), s.home, propagate);
   ASSERT_TRUE(at_truth.converged && at_truth.rotation_center);
@@ -541,6 +542,31 @@ TEST(PolynomialGaze, ErrsLittleAtTheCalibrationPositionAndMoreAsTheHeadMoves) {
   EXPECT_LT(by_move["home"].mean_deg, 1.0);
   EXPECT_GT(by_move["sideways"].mean_deg, 2 * by_move["home"].mean_deg);
   EXPECT_GT(by_move["back"].mean_deg, 2 * by_move["home"].mean_deg);
+}
+
+// The features' noise is a standard deviation (and a scale of the glints'
+// own): refused, with the key named, before any fit runs.
+TEST(ModelGaze, RefusesNoiseThatIsNoDeviation) {
+  const GazeRig s;
+  const ScreenPoint target{120, 80};
+  const GazeFeatures f = *exact_gaze_features(s.view(s.home, target), PupilFeature::refracted_center);
+  const Camera& camera = s.rig.cameras[0];
+  const auto estimate_refuses = [&](const FeatureNoise& noise, const std::string& key) {
+    try {
+      estimate_model_gaze(camera, s.rig.illuminators, f, s.tracker_eye(), s.screen, s.home, noise);
+      ADD_FAILURE() << key << ": accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  };
+  estimate_refuses({.glint_px = 0}, "glint_px");
+  estimate_refuses({.pupil_px = std::nan("")}, "pupil_px");
+  estimate_refuses({.glint_sd_scale = -1}, "glint_sd_scale");
+  ModelGazeCalibrationSettings settings;
+  settings.noise.pupil_px = -0.05;
+  EXPECT_THROW(calibrate_model_gaze(camera, s.rig.illuminators, std::vector<GazeFeatures>(9, f),
+                                    std::vector<Point3>(9, s.screen.at(target)), s.tracker_eye(), s.home, settings),
+               std::invalid_argument);
 }
 
 TEST(PolynomialGaze, RefusesTooFewOrDegenerateFrames) {

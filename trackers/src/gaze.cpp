@@ -298,10 +298,14 @@ CorneaAndAxes cornea_and_axes(const Camera& camera, const std::vector<Illuminato
   return out;
 }
 
-void check_glint_sd_scale(const std::string& name, double scale) {
-  if (!(scale >= 0 && std::isfinite(scale))) {
-    throw std::invalid_argument(name + " = " + std::to_string(scale) +
-                                ": must be finite and >= 0 (0: the glints' own deviations are not used)");
+void check(const FeatureNoise& noise, const std::string& owner) {
+  const auto fail = [&](const char* key, double value, const char* rule) {
+    throw std::invalid_argument(owner + "." + key + " = " + std::to_string(value) + ": " + rule);
+  };
+  if (!(noise.glint_px > 0 && std::isfinite(noise.glint_px))) fail("glint_px", noise.glint_px, "must be finite and > 0");
+  if (!(noise.pupil_px > 0 && std::isfinite(noise.pupil_px))) fail("pupil_px", noise.pupil_px, "must be finite and > 0");
+  if (!(noise.glint_sd_scale >= 0 && std::isfinite(noise.glint_sd_scale))) {
+    fail("glint_sd_scale", noise.glint_sd_scale, "must be finite and >= 0 (0: the glints' own deviations are not used)");
   }
 }
 
@@ -362,7 +366,7 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
                               const Point3& start, const std::optional<FeatureNoise>& given_noise) {
   const FeatureNoise noise = given_noise.value_or(FeatureNoise{});
-  check_glint_sd_scale("FeatureNoise::glint_sd_scale", noise.glint_sd_scale);
+  check(noise, "estimate_model_gaze: noise");
   std::vector<int> rejected;
   ModelGaze out =
       model_gaze(camera, lights, features, model, screen, start, noise, CorneaFitSettings{}.reject_beyond_sd, &rejected);
@@ -466,12 +470,12 @@ ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illu
   // which the pupil's depth moves): its centres do not depend on kappa.
   std::vector<GlintObservation> glints;
   for (std::size_t f = 0; f < frames.size(); ++f) {
-    add_observations(glints, frames[f].glints, static_cast<int>(f), 0, settings.glint_sd_scale);
+    add_observations(glints, frames[f].glints, static_cast<int>(f), 0, settings.noise.glint_sd_scale);
   }
   CorneaFitSettings cornea_settings;
   cornea_settings.cornea_radius_mm = initial.cornea_radius_mm;
   cornea_settings.fit_radius = settings.fit_cornea_radius;
-  cornea_settings.pixel_noise_px = settings.pixel_noise_px;
+  cornea_settings.pixel_noise_px = settings.noise.glint_px;
   const CorneaAndAxes fitted = cornea_and_axes(camera, lights, glints, frames, initial, cornea_settings, starts);
   const CorneaFit& cornea = fitted.cornea;
   out.warnings = cornea.warnings;
@@ -642,26 +646,20 @@ ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vecto
                                           const std::vector<GazeFeatures>& frames,
                                           const std::vector<Point3>& targets, const GazeEyeModel& initial,
                                           const Point3& start, const ModelGazeCalibrationSettings& settings) {
-  check_glint_sd_scale("ModelGazeCalibrationSettings::glint_sd_scale", settings.glint_sd_scale);
-  if (settings.propagate_noise && settings.propagate_noise->glint_sd_scale != settings.glint_sd_scale) {
-    // The fit and the propagation must take the glints' noise alike.
-    throw std::invalid_argument("calibrate_model_gaze: glint_sd_scale = " + std::to_string(settings.glint_sd_scale) +
-                                " but propagate_noise's = " +
-                                std::to_string(settings.propagate_noise->glint_sd_scale) + ": must be the same");
-  }
+  check(settings.noise, "calibrate_model_gaze: settings.noise");
   ModelGazeCalibration out = calibrate_once(camera, lights, frames, targets, initial, start, settings);
   if (!settings.propagate_noise || !out.converged || out.covariance.empty()) return out;
   // Each feature coordinate moved both ways by a small step, the whole
   // calibration run again from the estimate: the Jacobian of the
   // estimates by the features, and their covariance J diag(sd^2) J^T.
-  const FeatureNoise noise = *settings.propagate_noise;
+  const FeatureNoise& noise = settings.noise;
   const bool depth = settings.fit_pupil_depth;
   const std::vector<double> center = estimates(out, depth);
   const Eigen::Index k = static_cast<Eigen::Index>(center.size());
   Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(k, k);
   constexpr double step_px = 1e-3;
   ModelGazeCalibrationSettings once = settings;
-  once.propagate_noise.reset();
+  once.propagate_noise = false;
   const GazeEyeModel from = out.model;
   const auto add = [&](const std::vector<GazeFeatures>& plus, const std::vector<GazeFeatures>& minus, double sd) {
     const ModelGazeCalibration p = calibrate_once(camera, lights, plus, targets, from, start, once);

@@ -144,16 +144,16 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
 struct ModelGazeCalibrationSettings {
   bool fit_pupil_depth = false;   // with kappa
   bool fit_cornea_radius = false;  // from all frames' glints together
-  double pixel_noise_px = 0.1;    // of the glints without their own deviation, for the cornea fit
-  // As FeatureNoise's: > 0, the glints' own deviations times this; the
-  // same as propagate_noise's when that is given (else invalid_argument).
-  double glint_sd_scale = 0;
-  // Given: the covariances of kappa (and the pupil's depth) and of the
-  // centre of rotation by first-order propagation of this noise through
-  // the whole calibration (central differences: two calibrations per
-  // feature coordinate). Absent: from the residuals' scatter, which
-  // misjudges them (docs/calibration.md).
-  std::optional<FeatureNoise> propagate_noise;
+  // The features' noise. The cornea fit weighs each glint by it (its own
+  // deviation times glint_sd_scale, or glint_px); with propagate_noise the
+  // calibration's covariances come from it too.
+  FeatureNoise noise{.glint_px = 0.1, .pupil_px = 0.05};
+  // true: the covariances of kappa (and the pupil's depth) and of the
+  // centre of rotation by first-order propagation of `noise` through the
+  // whole calibration (central differences: two calibrations per feature
+  // coordinate). false: from the residuals' scatter, which misjudges them
+  // (docs/calibration.md).
+  bool propagate_noise = false;
 };
 
 struct ModelGazeCalibration {

@@ -14,7 +14,7 @@ trackers::BlobGlintSettings glint_settings_for(const Camera& camera, const std::
       std::all_of(lights.begin(), lights.end(), [](const Illuminator& l) { return l.emitter_diameter_mm == 0; });
   if (depth > camera.focal_length_mm() && points) {
     const renderer::PointSpread spread = renderer::point_spread(camera, depth);
-    // The detector accepts a told width within [0.1, 10] px; beyond, it estimates its own.
+    // The detector refuses a told width outside [0.1, 10] px; left at 0 it estimates its own.
     if (spread.defocus_radius_px == 0 && spread.sigma_px >= 0.1 && spread.sigma_px <= 10) {
       settings.spot_sigma_px = spread.sigma_px;
     }

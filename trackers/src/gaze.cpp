@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 
 #include "purkinje/models/eye.h"
@@ -300,7 +301,9 @@ CorneaAndAxes cornea_and_axes(const Camera& camera, const std::vector<Illuminato
 
 void check(const FeatureNoise& noise, const std::string& owner) {
   const auto fail = [&](const char* key, double value, const char* rule) {
-    throw std::invalid_argument(owner + "." + key + " = " + std::to_string(value) + ": " + rule);
+    std::ostringstream text;  // not to_string, which prints a tiny value as 0.000000
+    text << owner << "." << key << " = " << value << ": " << rule;
+    throw std::invalid_argument(text.str());
   };
   if (!(noise.glint_px > 0 && std::isfinite(noise.glint_px))) fail("glint_px", noise.glint_px, "must be finite and > 0");
   if (!(noise.pupil_px > 0 && std::isfinite(noise.pupil_px))) fail("pupil_px", noise.pupil_px, "must be finite and > 0");

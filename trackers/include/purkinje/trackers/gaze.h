@@ -70,8 +70,9 @@ struct GazeEyeModel {
 // of purkinje's eyes (world_from_eye_rotation).
 UnitVector3 visual_axis_for(const UnitVector3& optical_axis, double kappa_horizontal_rad, double kappa_vertical_rad);
 
-// The features' noise, for the uncertainty a gaze estimate reports:
-// standard deviations of each glint's and of the pupil's u and v.
+// The features' noise: standard deviations of each glint's and of the
+// pupil's u and v. The cornea fit weighs the glints by it, and the
+// uncertainties a gaze estimate or a calibration reports come from it.
 struct FeatureNoise {
   double glint_px = 0.05;  // a glint's, where it has none of its own (below)
   double pupil_px = 0.05;
@@ -136,7 +137,9 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
 // even when the gaze misses the screen. Without, or where the estimate
 // itself is not valid (the pupil's ray misses the model), the cornea's
 // covariance is the glint fit's, about a fixed axis, from FeatureNoise's
-// default glint noise; a warning says when propagation failed.
+// default glint noise; a warning says when propagation failed. Throws
+// std::invalid_argument for a noise that is no deviation (glint_px and
+// pupil_px finite and > 0, glint_sd_scale finite and >= 0).
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
                               const Point3& start, const std::optional<FeatureNoise>& noise = std::nullopt);
@@ -147,7 +150,7 @@ struct ModelGazeCalibrationSettings {
   // The features' noise. The cornea fit weighs each glint by it (its own
   // deviation times glint_sd_scale, or glint_px); with propagate_noise the
   // calibration's covariances come from it too.
-  FeatureNoise noise{.glint_px = 0.1, .pupil_px = 0.05};
+  FeatureNoise noise{.glint_px = 0.1, .pupil_px = 0.05};  // glint_px: CorneaFitSettings::pixel_noise_px's default
   // true: the covariances of kappa (and the pupil's depth) and of the
   // centre of rotation by first-order propagation of `noise` through the
   // whole calibration (central differences: two calibrations per feature
@@ -181,8 +184,8 @@ struct ModelGazeCalibration {
 // Calibrates kappa (and, if asked, the pupil's depth and the cornea's
 // radius) from frames of the eye fixating known world points. `initial`
 // gives the fixed values and the starts. Throws std::invalid_argument when
-// frames and targets differ in number or there are fewer targets than
-// unknowns.
+// frames and targets differ in number, there are fewer targets than
+// unknowns, or settings.noise is no deviation (as estimate_model_gaze).
 ModelGazeCalibration calibrate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                                           const std::vector<GazeFeatures>& frames,
                                           const std::vector<Point3>& targets, const GazeEyeModel& initial,

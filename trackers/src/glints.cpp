@@ -491,13 +491,18 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
         const PupilEdge* edge = flank == 1 && spot.edge ? &*spot.edge : nullptr;
         // Without an edge the departures are the pixels themselves.
         cv::Mat departure = local;
-        std::vector<std::array<double, 6>> edge_by;  // per window pixel, where there is an edge
+        // Per window pixel, where there is an edge: its brightness there, and its derivatives.
+        std::vector<double> edge_at;
+        std::vector<std::array<double, 6>> edge_by;
         if (edge) {
           departure = local.clone();
+          edge_at.resize(window.area());
           edge_by.resize(window.area());
           for (int y = 0; y < window.height; ++y) {
             for (int x = 0; x < window.width; ++x) {
-              departure.at<float>(y, x) -= static_cast<float>(edge->at(x - su, y - sv, edge_by[y * window.width + x].data()));
+              const int i = y * window.width + x;
+              edge_at[i] = edge->at(x - su, y - sv, edge_by[i].data());
+              departure.at<float>(y, x) -= static_cast<float>(edge_at[i]);
             }
           }
         }
@@ -530,7 +535,8 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
             std::array<double, 6> by_edge{};
             double background = *middle;
             if (edge) {
-              const double below = edge->at(x - su, y - sv, by_edge.data());
+              const double below = edge_at[y * window.width + x];
+              by_edge = edge_by[y * window.width + x];
               background += below;
               for (int a = 0; a < 6; ++a) by_edge[a] -= moved[a] / static_cast<double>(around.size());
               for (float& a : around) a += static_cast<float>(below);  // the scatter about the background

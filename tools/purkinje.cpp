@@ -23,6 +23,7 @@
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/renderer/image_io.h"
+#include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/render.h"
 
 namespace {
@@ -265,9 +266,22 @@ void add_score_output_options(CLI::App& command, purkinje::tools::ScoreOutput& r
       ->capture_default_str();
 }
 
+// The version, and the instruction set Embree's kernels will use: what a
+// benchmark figure or a bug report needs beside it.
+std::string version_text() {
+  std::string embree;
+  try {
+    const purkinje::renderer::EmbreeDevice device = purkinje::renderer::embree_device();
+    embree = "isa " + device.isa + " (the CPU's best: " + purkinje::renderer::cpu_isa() + ")";
+  } catch (const std::exception& error) {
+    embree = error.what();
+  }
+  return std::string("purkinje ") + PURKINJE_VERSION + "\nembree: " + embree;
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"purkinje: physically based simulator of eye-tracker cameras"};
-  app.set_version_flag("--version", std::string("purkinje ") + PURKINJE_VERSION);
+  app.set_version_flag("--version", version_text());
   app.footer(kExitCodes);
   app.require_subcommand(1);
 

@@ -321,6 +321,31 @@ struct Query {
 };
 static_assert(std::is_standard_layout_v<Query> && offsetof(Query, embree) == 0);
 
+// Embree's packet types and calls by width.
+template <int kWidth>
+struct EmbreePacket;
+template <>
+struct EmbreePacket<4> {
+  using RayHit = RTCRayHit4;
+  static void intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, RayHit* rayhit) {
+    rtcIntersect4(valid, scene, context, rayhit);
+  }
+};
+template <>
+struct EmbreePacket<8> {
+  using RayHit = RTCRayHit8;
+  static void intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, RayHit* rayhit) {
+    rtcIntersect8(valid, scene, context, rayhit);
+  }
+};
+template <>
+struct EmbreePacket<16> {
+  using RayHit = RTCRayHit16;
+  static void intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, RayHit* rayhit) {
+    rtcIntersect16(valid, scene, context, rayhit);
+  }
+};
+
 // A float distance for Embree at or beyond the double one (traversal culls
 // beyond tfar, so it must never fall short).
 float embree_far(double t) { return static_cast<float>(t * (1.0 + 1e-6) + 1e-4); }
@@ -657,6 +682,7 @@ struct RayTracer::Impl {
   double diagonal = 0;  // of the bounds: no ray from inside stays inside longer
   bool empty = true;
   bool masks = false;
+  int packet_width = 4;  // rays per Embree packet: 4, 8 or 16
 
   std::mutex error_mutex;
   std::string error_message;
@@ -738,39 +764,57 @@ struct RayTracer::Impl {
     }
   }
 
-  // run<false> for up to 16 lanes in one packet (coherent rays, such as
-  // neighbouring camera rays, share the traversal).
-  void run16(Lane* lanes, std::size_t count) const {
-    alignas(64) RTCRayHit16 rayhit;
-    alignas(64) int valid[16] = {};
+  // run<false> for up to kWidth lanes in one packet (coherent rays, such as
+  // neighbouring camera rays, share the traversal). Every lane of the
+  // packet is written: Embree's fallback for a width its ISA has no
+  // kernel for (rtcIntersect16 without AVX-512) ignores the valid mask
+  // and traces any lane with tnear <= tfar, so an unused lane is an empty
+  // interval (tfar = -inf) whose id no callback can mistake for a lane.
+  template <int kWidth>
+  void run_packet(Lane* lanes, std::size_t count) const {
+    using Packet = EmbreePacket<kWidth>;
+    alignas(64) typename Packet::RayHit rayhit;
+    alignas(64) int valid[kWidth];
     bool any = false;
-    for (std::size_t i = 0; i < count; ++i) {
-      Lane& lane = lanes[i];
+    for (int i = 0; i < kWidth; ++i) {
       Point3 start;
       float tfar = 0;
-      if (!(lane.t_lo < lane.t_hi) || !start_float_ray(lane, start, tfar)) continue;
-      rayhit.ray.org_x[i] = static_cast<float>(start.x);
-      rayhit.ray.org_y[i] = static_cast<float>(start.y);
-      rayhit.ray.org_z[i] = static_cast<float>(start.z);
+      Lane* lane = static_cast<std::size_t>(i) < count ? &lanes[i] : nullptr;
+      const bool active = lane && lane->t_lo < lane->t_hi && start_float_ray(*lane, start, tfar);
+      rayhit.ray.org_x[i] = active ? static_cast<float>(start.x) : 0.0f;
+      rayhit.ray.org_y[i] = active ? static_cast<float>(start.y) : 0.0f;
+      rayhit.ray.org_z[i] = active ? static_cast<float>(start.z) : 0.0f;
       rayhit.ray.tnear[i] = 0.0f;
-      rayhit.ray.dir_x[i] = static_cast<float>(lane.direction.x);
-      rayhit.ray.dir_y[i] = static_cast<float>(lane.direction.y);
-      rayhit.ray.dir_z[i] = static_cast<float>(lane.direction.z);
+      rayhit.ray.dir_x[i] = active ? static_cast<float>(lane->direction.x) : 0.0f;
+      rayhit.ray.dir_y[i] = active ? static_cast<float>(lane->direction.y) : 0.0f;
+      rayhit.ray.dir_z[i] = active ? static_cast<float>(lane->direction.z) : 1.0f;
       rayhit.ray.time[i] = 0.0f;
-      rayhit.ray.tfar[i] = tfar;
-      rayhit.ray.mask[i] = ~0u;
+      rayhit.ray.tfar[i] = active ? tfar : -INFINITY;
+      rayhit.ray.mask[i] = active ? ~0u : 0u;
       rayhit.ray.id[i] = static_cast<unsigned>(i);  // the lane
       rayhit.ray.flags[i] = 0;
+      rayhit.hit.Ng_x[i] = rayhit.hit.Ng_y[i] = rayhit.hit.Ng_z[i] = 0.0f;
+      rayhit.hit.u[i] = rayhit.hit.v[i] = 0.0f;
+      rayhit.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
       rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
       rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-      valid[i] = -1;
-      any = true;
+      valid[i] = active ? -1 : 0;
+      any = any || active;
     }
     if (!any) return;
     Query query;
     rtcInitIntersectContext(&query.embree);
     query.lanes = lanes;
-    rtcIntersect16(valid, scene, &query.embree, &rayhit);
+    Packet::intersect(valid, scene, &query.embree, &rayhit);
+  }
+
+  // The packets' width: the widest the device traces natively.
+  void run_packet(Lane* lanes, std::size_t count) const {
+    switch (packet_width) {
+      case 16: run_packet<16>(lanes, count); break;
+      case 8: run_packet<8>(lanes, count); break;
+      default: run_packet<4>(lanes, count); break;
+    }
   }
 
   bool occluded(const Point3& from, const Point3& to, bool skip_cornea) const {
@@ -831,12 +875,17 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     impl.meshes.push_back(std::make_unique<PlacedMesh>(static_cast<int>(i), scene.meshes[i]));
   }
 
-  impl.device = rtcNewDevice(nullptr);
+  const EmbreeDevice wanted = embree_device();
+  impl.device = rtcNewDevice(wanted.config.c_str());
   if (!impl.device) {
-    throw std::runtime_error("Embree failed to create a device: error code " +
+    throw std::runtime_error("Embree failed to create a device with configuration \"" + wanted.config +
+                             "\" (from " + kEmbreeConfigVariable + "): error code " +
                              std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))));
   }
   rtcSetDeviceErrorFunction(impl.device, &Impl::on_error, &impl);
+  impl.packet_width = rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) ? 16
+                      : rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) ? 8
+                                                                                                       : 4;
   impl.masks = rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
   if (!impl.meshes.empty() &&
       rtcGetDeviceProperty(impl.device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) == 0) {
@@ -892,6 +941,8 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
 
 RayTracer::~RayTracer() = default;
 
+int RayTracer::packet_width() const { return impl_->packet_width; }
+
 namespace {
 
 Lane lane_of(const Ray& ray) {
@@ -938,13 +989,14 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
                                 std::to_string(hits.size()) + " hits");
   }
   for (const Ray& ray : rays) check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
-  constexpr std::size_t kPacket = 16, kMinPacket = 4;
-  for (std::size_t first = 0; first < rays.size(); first += kPacket) {
-    const std::size_t count = std::min(kPacket, rays.size() - first);
+  constexpr std::size_t kMaxPacket = 16, kMinPacket = 4;
+  const auto width = static_cast<std::size_t>(impl_->packet_width);
+  for (std::size_t first = 0; first < rays.size(); first += width) {
+    const std::size_t count = std::min(width, rays.size() - first);
     // Only the lanes in use are constructed: a packet of 7 (a refined
     // pixel's rays) need not initialise 16.
     static_assert(std::is_trivially_destructible_v<Lane>);
-    alignas(Lane) unsigned char storage[kPacket * sizeof(Lane)];
+    alignas(Lane) unsigned char storage[kMaxPacket * sizeof(Lane)];
     Lane* lanes = reinterpret_cast<Lane*>(storage);
     for (std::size_t i = 0; i < count; ++i) new (&lanes[i]) Lane(lane_of(rays[first + i]));
     if (count < kMinPacket) {
@@ -953,7 +1005,7 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
         if (rays[first + i].t_min < rays[first + i].t_max) impl_->run<false>(lanes[i], false);
       }
     } else {
-      impl_->run16(lanes, count);
+      impl_->run_packet(lanes, count);
     }
     for (std::size_t i = 0; i < count; ++i) hits[first + i] = hit_of(rays[first + i], lanes[i]);
   }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "../../renderer/src/surfaces.h"
+#include "embree_isa.h"
 #include "purkinje/models/scene_file.h"
 
 namespace purkinje::renderer {
@@ -1068,13 +1069,17 @@ TEST(RayTracer, ConcurrentQueriesAgreeWithSerialOnes) {
   }
 }
 
-// Packets of 16 share Embree's traversal but must find exactly what one
-// ray at a time finds: eyes, lids, meshes, misses, empty intervals, and a
-// count that is not a multiple of 16 (its last 3 rays go one by one).
-TEST(RayTracer, PacketsFindTheSameHitsAsOneRayAtATime) {
+// Packets share Embree's traversal but must find exactly what one ray at a
+// time finds: eyes, lids, meshes, misses, empty intervals, under every
+// instruction set this CPU runs (packets of 4, 8 or 16), in spans of every
+// length from 1 to 16, so that packets are partly filled and a span may
+// end in a thin packet traced ray by ray. Embree's fallback for a width
+// without native kernels traces unused lanes too; an unused lane left
+// uninitialised once aborted every render without AVX-512.
+TEST(RayTracer, PacketsFindTheSameHitsAsOneRayAtATimeUnderEveryIsa) {
   Mesh mesh = two_triangles();
   for (Point3& v : mesh.vertices) v = v + Vector3{-15, -5, 480};  // in front of the eye, in view
-  const RayTracer tracer(scene_of({eye_with_lids(Eyelids{})}, {mesh}));
+  const Scene scene = scene_of({eye_with_lids(Eyelids{})}, {mesh});
   std::vector<Ray> rays;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> offset(-25, 25);
@@ -1088,29 +1093,73 @@ TEST(RayTracer, PacketsFindTheSameHitsAsOneRayAtATime) {
   // deeper 4 mm off the axis), on to the pupil and the iris.
   std::uniform_real_distribution<double> inside(-2.8, 2.8);
   for (int i = 0; i < 288; ++i) rays.push_back({{inside(rng), inside(rng), 598}, UnitVector3::unit_z()});
-  ASSERT_EQ(rays.size() % 16, 3u);  // the last packet is thin, traced ray by ray
-  std::vector<Hit> packed(rays.size());
-  tracer.intersect(std::span<const Ray>(rays), std::span<Hit>(packed));
-  std::array<int, 8> seen{};
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const Hit one = tracer.intersect(rays[i]);
-    ASSERT_EQ(packed[i].surface, one.surface) << i;
-    ASSERT_EQ(packed[i].eye, one.eye) << i;
-    ASSERT_EQ(packed[i].mesh, one.mesh) << i;
-    ASSERT_EQ(packed[i].triangle, one.triangle) << i;
-    ASSERT_EQ(packed[i].t, one.t) << i;
-    ASSERT_EQ(packed[i].point, one.point) << i;
-    ASSERT_EQ(packed[i].normal.vector(), one.normal.vector()) << i;
-    ASSERT_EQ(packed[i].front_face, one.front_face) << i;
-    ++seen[static_cast<int>(one.surface)];
+  const std::vector<std::string> isas = testing::runnable_isas();
+  ASSERT_GE(isas.size(), 2u);  // every x86-64 CPU runs SSE2 and SSE4.2 at least
+  for (const std::string& isa : isas) {
+    SCOPED_TRACE("isa=" + isa);
+    const testing::ScopedEmbreeConfig config("isa=" + isa);
+    const RayTracer tracer(scene);
+    EXPECT_EQ(tracer.packet_width(), isa == "avx512" ? 16 : isa.starts_with("avx") ? 8 : 4);
+    std::vector<Hit> packed(rays.size());
+    for (std::size_t first = 0, length = 1; first < rays.size(); first += length, length = length % 16 + 1) {
+      const std::size_t count = std::min(length, rays.size() - first);
+      tracer.intersect(std::span<const Ray>(rays).subspan(first, count),
+                       std::span<Hit>(packed).subspan(first, count));
+    }
+    std::array<int, 8> seen{};
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit one = tracer.intersect(rays[i]);
+      ASSERT_EQ(packed[i].surface, one.surface) << i;
+      ASSERT_EQ(packed[i].eye, one.eye) << i;
+      ASSERT_EQ(packed[i].mesh, one.mesh) << i;
+      ASSERT_EQ(packed[i].triangle, one.triangle) << i;
+      ASSERT_EQ(packed[i].t, one.t) << i;
+      ASSERT_EQ(packed[i].point, one.point) << i;
+      ASSERT_EQ(packed[i].normal.vector(), one.normal.vector()) << i;
+      ASSERT_EQ(packed[i].front_face, one.front_face) << i;
+      ++seen[static_cast<int>(one.surface)];
+    }
+    // The rays met every kind of surface, and missed too.
+    for (const Surface s : {Surface::none, Surface::skin, Surface::sclera, Surface::iris, Surface::pupil,
+                            Surface::cornea_anterior, Surface::mesh}) {
+      EXPECT_GT(seen[static_cast<int>(s)], 0) << to_string(s);
+    }
+    std::vector<Hit> too_few(rays.size() - 1);
+    EXPECT_THROW(tracer.intersect(std::span<const Ray>(rays), std::span<Hit>(too_few)), std::invalid_argument);
   }
-  // The rays met every kind of surface, and missed too.
-  for (const Surface s : {Surface::none, Surface::skin, Surface::sclera, Surface::iris, Surface::pupil,
-                          Surface::cornea_anterior, Surface::mesh}) {
-    EXPECT_GT(seen[static_cast<int>(s)], 0) << to_string(s);
-  }
-  std::vector<Hit> too_few(rays.size() - 1);
-  EXPECT_THROW(tracer.intersect(std::span<const Ray>(rays), std::span<Hit>(too_few)), std::invalid_argument);
+}
+
+// Embree 3 runs an unknown isa as SSE2 and ignores unknown keys; purkinje
+// refuses both, and an instruction set the CPU lacks, naming the variable.
+TEST(EmbreeDevice, ChecksTheConfigurationAgainstEmbreesKeysAndTheCpu) {
+  EXPECT_EQ(embree_device("", "avx2").isa, "avx2");
+  EXPECT_EQ(embree_device("", "avx2").config, "");
+  EXPECT_EQ(embree_device("isa=sse4.2", "avx512").isa, "sse4.2");
+  EXPECT_EQ(embree_device(" isa = avx , threads=2 ", "avx2").isa, "avx");
+  EXPECT_EQ(embree_device("max_isa=avx", "avx512").isa, "avx");
+  EXPECT_EQ(embree_device("isa=avx2,max_isa=sse2", "avx2").isa, "sse2");
+  EXPECT_EQ(embree_device("verbose=0,", "sse2").isa, "sse2");
+  const auto refuses = [](const std::string& config, const std::string& cpu, const std::string& rule) {
+    try {
+      embree_device(config, cpu);
+      ADD_FAILURE() << config << " accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(std::string(kEmbreeConfigVariable) + "=\"" + config + "\""), std::string::npos) << what;
+      EXPECT_NE(what.find(rule), std::string::npos) << what;
+    }
+  };
+  refuses("isa=bogus", "avx2", "isa 'bogus' is not one of sse2, sse4.2, avx, avx2, avx512");
+  refuses("isa=avx512", "avx2", "this one supports up to avx2");
+  refuses("max_isa=avx2", "sse4.2", "this one supports up to sse4.2");
+  refuses("frobnicate=3", "avx2", "unknown key 'frobnicate'");
+  refuses("avx2", "avx2", "'avx2' is not key=value");
+  // What the CPU runs is one of Embree's instruction sets, and the
+  // environment's configuration reaches every device.
+  EXPECT_EQ(embree_device("", cpu_isa()).isa, cpu_isa());
+  const testing::ScopedEmbreeConfig bad("isa=avx3");
+  EXPECT_THROW(embree_device(), std::invalid_argument);
+  EXPECT_THROW(RayTracer(scene_of({facing_camera(keratometric_eye())})), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------

@@ -189,6 +189,7 @@ TEST_F(Cli, HelpExitsZeroForTheProgramAndEverySubcommand) {
 TEST_F(Cli, VersionExitsZero) {
   EXPECT_EQ(run("--version"), 0);
   EXPECT_EQ(out().rfind("purkinje ", 0), 0u) << out();
+  EXPECT_NE(out().find("embree: isa "), std::string::npos) << out();
 }
 
 TEST_F(Cli, UsageErrorsExitTwo) {

@@ -20,6 +20,8 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
+#include <string_view>
 
 #include "purkinje/models/geometry.h"
 #include "purkinje/models/scene.h"
@@ -58,10 +60,31 @@ struct Hit {
   bool front_face = true;   // the ray meets the side `normal` points to
 };
 
+// Embree picks its kernels (SSE2 to AVX-512) at run time. Every device
+// purkinje creates takes its configuration from this environment variable,
+// in Embree's syntax: comma-separated key=value pairs, e.g. "isa=avx2" or
+// "isa=sse4.2,threads=1" (docs/rendering.md). Images are the same under
+// every ISA, byte for byte: the callbacks decide every hit in double.
+inline constexpr const char* kEmbreeConfigVariable = "PURKINJE_EMBREE_CONFIG";
+
+struct EmbreeDevice {
+  std::string config;  // passed to Embree, checked
+  std::string isa;     // its kernels: sse2, sse4.2, avx, avx2 or avx512
+};
+// The best of Embree's instruction sets this CPU runs.
+std::string cpu_isa();
+// The configuration in kEmbreeConfigVariable, checked against Embree's
+// documented keys, its instruction sets and this CPU (Embree itself accepts
+// an unknown key silently and runs an unknown isa as SSE2). Throws
+// std::invalid_argument naming the variable, its value and the rule.
+EmbreeDevice embree_device();
+// The same for a given configuration and CPU instruction set (cpu_isa()).
+EmbreeDevice embree_device(std::string_view config, std::string_view cpu_isa);
+
 class RayTracer {
  public:
   // Throws std::runtime_error on an Embree error, std::invalid_argument
-  // (naming eyes[i] or meshes[i]) for an eye whose surfaces cannot be built
+  // for a bad kEmbreeConfigVariable (see embree_device()) or (naming eyes[i] or meshes[i]) for an eye whose surfaces cannot be built
   // or sealed, or a mesh with an index out of range or a non-finite vertex.
   explicit RayTracer(const Scene& scene);
   ~RayTracer();
@@ -72,9 +95,13 @@ class RayTracer {
   // for a non-finite origin or t_min < 0; an empty interval hits nothing.
   Hit intersect(const Ray& ray) const;
   // The closest hit of each ray, as intersect(ray) finds it, traced in
-  // packets of 16: cheaper for coherent rays such as neighbouring camera
-  // rays. `hits` must be as long as `rays`.
+  // packets of packet_width(): cheaper for coherent rays such as
+  // neighbouring camera rays. `hits` must be as long as `rays`.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
+  // The widest packet the device's ISA traces natively: 16 with AVX-512,
+  // 8 with AVX or AVX2, 4 with SSE (wider packets would run Embree's slower
+  // stream fallback).
+  int packet_width() const;
   // Whether any surface (meshes included) lies on the open segment between
   // two points (both ends trimmed by 1e-6 of the length + 1e-9 mm, so a
   // segment may start or end on a surface). The cornea counts: light does

@@ -2,13 +2,13 @@
 // fields only, each checked, every error naming the file, key and value.
 
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
+#include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 
 namespace purkinje {
@@ -83,13 +83,18 @@ class Reader {
 }  // namespace
 
 ImageLabels read_image_labels(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error(file.string() + ": cannot be read");
+  return parse_image_labels(read_input_file(file, kMaxLabelsFileBytes, "a labels file"), file);
+}
+
+ImageLabels parse_image_labels(std::string_view text, const std::filesystem::path& file) {
   json root;
   try {
-    root = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw std::runtime_error(file.string() + ": not JSON: " + e.what());
+    root = json::parse(text);
+  } catch (const json::exception& e) {
+    // A syntax error, or a number beyond double's range (1e400).
+    std::string what = e.what();
+    if (const auto bracket = what.find("] "); bracket != std::string::npos) what = what.substr(bracket + 2);
+    throw std::runtime_error(file.string() + ": not JSON: " + what);
   }
   const Reader r(file);
   if (!root.is_object()) r.fail("(top level)", nullptr, "must be an object");

@@ -5,6 +5,8 @@
 
 #include "purkinje/models/obj_file.h"
 
+#include "purkinje/models/input_file.h"
+
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -270,17 +272,13 @@ ObjMesh parse_obj(std::string_view text) {
 }
 
 ObjMesh load_obj(const std::filesystem::path& file) {
-  std::error_code ignored;
-  if (std::filesystem::is_directory(file, ignored)) throw ObjError("is a directory, not an OBJ file");
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    throw ObjError(std::filesystem::exists(file, ignored) ? "cannot open (permission denied or not a file)"
-                                                          : "no such file");
+  std::string text;
+  try {
+    text = read_input_file(file, kMaxMeshFileBytes, "an OBJ file");
+  } catch (const InputFileError& e) {
+    throw ObjError(e.reason());
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ObjError("cannot read");
-  return parse_obj(text.str());
+  return parse_obj(text);
 }
 
 }  // namespace purkinje

@@ -4,6 +4,8 @@
 
 #include "purkinje/models/scene_file.h"
 
+#include "purkinje/models/input_file.h"
+
 #include <algorithm>
 #include <charconv>
 #include <climits>
@@ -1041,20 +1043,13 @@ Scene parse_scene(const std::string& text, const std::string& source_name,
 }
 
 Scene load_scene(const std::filesystem::path& file) {
-  std::error_code ignored;
-  if (std::filesystem::is_directory(file, ignored)) {
-    throw SceneError(file.string() + ": cannot read: is a directory");
+  std::string text;
+  try {
+    text = read_input_file(file, kMaxSceneFileBytes, "a scene file");
+  } catch (const InputFileError& e) {
+    throw SceneError(file.string() + ": cannot read: " + e.reason());
   }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    throw SceneError(file.string() + ": cannot open: " +
-                     (std::filesystem::exists(file) ? "permission denied or not a file"
-                                                    : "no such file"));
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw SceneError(file.string() + ": cannot read");
-  return parse_scene(text.str(), file.string(), file.parent_path());
+  return parse_scene(text, file.string(), file.parent_path());
 }
 
 }  // namespace purkinje

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -11,6 +10,7 @@
 #include <vector>
 
 #include "csv.h"
+#include "purkinje/models/input_file.h"
 
 namespace purkinje::trackers {
 
@@ -81,8 +81,11 @@ class Row {
 }  // namespace
 
 std::map<std::string, Detections> read_detections_csv(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error(file.string() + ": cannot be read");
+  return parse_detections_csv(read_input_file(file, kMaxDetectionsFileBytes, "a detections file"), file);
+}
+
+std::map<std::string, Detections> parse_detections_csv(const std::string& text, const std::filesystem::path& file) {
+  std::istringstream in(text);
   const auto fail = [&](int line, const std::string& what) {
     throw std::runtime_error(file.string() + ":" + std::to_string(line) + ": " + what);
   };

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 
 namespace purkinje::trackers {
@@ -17,13 +18,20 @@ namespace purkinje::trackers {
 GreyImage read_grey_image(const std::filesystem::path& file, int bits) {
   const auto fail = [&](const std::string& rule) { throw std::runtime_error(file.string() + ": " + rule); };
   if (bits < 1 || bits > 16) fail("bits = " + std::to_string(bits) + ": must be in [1, 16]");
+  std::string bytes;
+  try {
+    bytes = read_input_file(file, kMaxImageFileBytes, "an image file");
+  } catch (const InputFileError& e) {
+    fail("cannot be read: " + e.reason());
+  }
   cv::Mat m;
   try {
-    m = cv::imread(file.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8U, bytes.data());
+    m = cv::imdecode(encoded, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
   } catch (const cv::Exception& e) {
     fail(std::string("cannot be read as an image: ") + e.what());
   }
-  if (m.empty()) fail("cannot be read as an image (missing, or not a format OpenCV reads)");
+  if (m.empty()) fail("cannot be read as an image (not a format OpenCV reads)");
   if (m.depth() != CV_8U && m.depth() != CV_16U) fail("must hold 8- or 16-bit integers");
   if (m.depth() == CV_8U && bits > 8) {
     fail("an 8-bit image for a sensor of " + std::to_string(bits) + " bits: expected a 16-bit file");

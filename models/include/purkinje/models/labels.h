@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "purkinje/models/scene.h"
@@ -39,7 +40,11 @@ struct ImageLabels {
 
 // Throws std::runtime_error naming the file, the key, its value and the
 // rule when the file cannot be read or is not a labels file of this format.
+// Regular files of at most kMaxLabelsFileBytes only (input_file.h).
 ImageLabels read_image_labels(const std::filesystem::path& file);
+// The same from the file's text; `file` names it in messages and is the
+// folder the image is looked for in.
+ImageLabels parse_image_labels(std::string_view text, const std::filesystem::path& file);
 
 // Writes `contents` to a temporary file in the same directory, flushes it
 // to disk and renames it over `file`, so readers see the old file or the

@@ -23,7 +23,10 @@ namespace purkinje::trackers {
 
 // By image (as the file names it). Throws std::runtime_error naming the
 // file, the line, the column, its text and the rule for a malformed file.
+// Regular files of at most kMaxDetectionsFileBytes only (input_file.h).
 std::map<std::string, Detections> read_detections_csv(const std::filesystem::path& file);
+// The same from the file's text; `file` names it in messages.
+std::map<std::string, Detections> parse_detections_csv(const std::string& text, const std::filesystem::path& file);
 
 // The same format, all nine columns, images in the map's order.
 std::string detections_csv(const std::map<std::string, Detections>& detections);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "output_checks.h"
 #include "tracker_optics.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
@@ -145,6 +146,12 @@ void add_errors(trackers::Results& r, const std::string& prefix, const Tally& t)
 }  // namespace
 
 int run_calibrate(const CalibrateRequest& request) {
+  if (const auto refusal = check_output_folder(request.output_dir, {},
+                                               {"calibration.txt", "calibration.json", "frames.csv", "gaze_error.png"},
+                                               {request.scene_file})) {
+    std::cerr << "purkinje calibrate: error: " << refusal->message << "\n";
+    return refusal->exit_code;
+  }
   Scene rig;
   try {
     rig = load_scene(request.scene_file);

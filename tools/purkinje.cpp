@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <charconv>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -12,12 +13,14 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <new>
 #include <numbers>
 #include <cmath>
 #include <sstream>
 #include <string>
 
 #include "commands.h"
+#include "output_checks.h"
 #include "purkinje/models/eye_variation.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
@@ -46,6 +49,30 @@ constexpr const char* kExitCodes =
     "  2  usage error: unknown option, missing or invalid argument\n"
     "  3  output error: the output could not be written (no partial file is left)";
 
+// CLI11's Range lets NaN through (every comparison with it is false), and
+// its unsigned conversion reads "-1" as 2^64 - 1: numbers are checked as
+// text first.
+const CLI::Validator kFinite(
+    [](const std::string& text) -> std::string {
+      double value = 0;
+      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+        return "must be a finite number, not \"" + text + "\"";
+      }
+      return {};
+    },
+    "FINITE");
+const CLI::Validator kSeed(
+    [](const std::string& text) -> std::string {
+      std::uint64_t value = 0;
+      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (text.empty() || error != std::errc() || end != text.data() + text.size()) {
+        return "must be an integer from 0 to 18446744073709551615 (2^64 - 1), not \"" + text + "\"";
+      }
+      return {};
+    },
+    "SEED");
+
 struct TruthRequest {
   std::string scene_file;
   std::string output_file;  // empty: standard output
@@ -54,6 +81,12 @@ struct TruthRequest {
 };
 
 int run_truth(const TruthRequest& request) {
+  if (!request.output_file.empty()) {
+    if (const auto refusal = purkinje::tools::check_output_file(request.output_file, {request.scene_file})) {
+      std::cerr << "purkinje truth: error: " << refusal->message << "\n";
+      return refusal->exit_code;
+    }
+  }
   std::string labels;
   try {
     const purkinje::Scene scene = purkinje::load_scene(request.scene_file);
@@ -214,6 +247,29 @@ int run_render(const RenderRequest& request) {
     std::cerr << "purkinje render: error: " << error.what() << "\n";
     return kBadInput;
   }
+  // The files a render writes; for a set, the index and, should the scene
+  // file itself lie in the folder, any name of the set's pattern.
+  std::vector<std::string> outputs;
+  if (variations.empty()) {
+    for (int camera : cameras) {
+      for (const char* extension : {".png", ".exr", ".json"}) {
+        outputs.push_back(file_stem(scene.name, scene.cameras[camera].name()) + extension);
+      }
+    }
+  } else {
+    outputs.push_back("variations.csv");
+    const std::filesystem::path scene_file(request.scene_file);
+    const std::string prefix = (scene.name.empty() ? std::string("scene") : scene.name) + "_v";
+    if (purkinje::tools::same_file(scene_file.parent_path().empty() ? "." : scene_file.parent_path(),
+                                   request.output_dir) &&
+        scene_file.filename().string().starts_with(prefix)) {
+      outputs.push_back(scene_file.filename().string());
+    }
+  }
+  if (const auto refusal = purkinje::tools::check_output_folder(request.output_dir, {}, outputs, {request.scene_file})) {
+    std::cerr << "purkinje render: error: " << refusal->message << "\n";
+    return refusal->exit_code;
+  }
   options.mode = request.mode == "reference" ? r::RenderMode::reference : r::RenderMode::fast;
   options.reference_photons_per_light = request.photons;
   options.samples_per_pixel = request.samples;
@@ -262,6 +318,7 @@ void add_score_output_options(CLI::App& command, purkinje::tools::ScoreOutput& r
       ->capture_default_str();
   command.add_option("--match-radius", request.match_radius_px,
                      "A detection within this many pixels of a label is paired with it")
+      ->check(kFinite)
       ->check(CLI::Range(0.001, 1000.0))
       ->capture_default_str();
 }
@@ -333,6 +390,7 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 30))
       ->capture_default_str();
   render->add_option("--seed", render_request.seed, "Seed of jitter and sensor noise")
+      ->check(kSeed)
       ->capture_default_str();
   render->add_flag("--no-noise", render_request.no_noise, "Leave out shot and read noise");
   render->add_flag("--glint-masks", render_request.glint_masks, "Add one glint mask per illuminator to the EXR");
@@ -345,15 +403,19 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(0, 10000000))
       ->capture_default_str();
   render->add_option("--variation-seed", render_request.variation_seed, "Seed of the variations' draws")
+      ->check(kSeed)
       ->capture_default_str();
   render->add_option("--max-gaze-deg", render_request.max_gaze_deg,
                      "Variations: gaze uniform over the cap within this angle of the scene's")
+      ->check(kFinite)
       ->check(CLI::Range(0.0, 90.0))
       ->capture_default_str();
   render->add_option("--min-pupil-mm", render_request.min_pupil_mm, "Variations: smallest pupil radius")
+      ->check(kFinite)
       ->check(CLI::Range(0.1, 10.0))
       ->capture_default_str();
   render->add_option("--max-pupil-mm", render_request.max_pupil_mm, "Variations: largest pupil radius")
+      ->check(kFinite)
       ->check(CLI::Range(0.1, 10.0))
       ->capture_default_str();
 
@@ -415,16 +477,20 @@ int run(int argc, char** argv) {
   calibrate->add_option("--glint-noise", calibrate_request.glint_noise_px,
                         "The glint detector's noise (s.d., px) the uncertainties assume\n"
                         "(default: measured against the noise frames' labels)")
+      ->check(kFinite)
       ->check(CLI::Range(1e-6, 10.0));
   calibrate->add_option("--pupil-noise", calibrate_request.pupil_noise_px,
                         "The pupil detector's noise (s.d., px) the uncertainties assume\n"
                         "(default: measured against the noise frames' labels)")
+      ->check(kFinite)
       ->check(CLI::Range(1e-6, 10.0));
   calibrate->add_option("--noise-frames", calibrate_request.noise_frames,
                         "Frames at random targets that only measure the detectors' noise (0: the calibration frames)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
-  calibrate->add_option("--seed", calibrate_request.seed, "Render seed of the first frame")->capture_default_str();
+  calibrate->add_option("--seed", calibrate_request.seed, "Render seed of the first frame")
+      ->check(kSeed)
+      ->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -433,7 +499,14 @@ int run(int argc, char** argv) {
     return app.exit(error) == 0 ? kOk : kUsageError;
   }
   if (*truth) return run_truth(truth_request);
-  if (*render) return run_render(render_request);
+  if (*render) {
+    if (render_request.min_pupil_mm > render_request.max_pupil_mm) {
+      std::cerr << "purkinje render: --min-pupil-mm " << render_request.min_pupil_mm << " is above --max-pupil-mm "
+                << render_request.max_pupil_mm << "\n";
+      return kUsageError;
+    }
+    return run_render(render_request);
+  }
   if (*track) return purkinje::tools::run_track(track_request);
   if (*score) return purkinje::tools::run_score(score_request);
   if (*calibrate) {
@@ -467,4 +540,18 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return run(argc, argv); }
+// No exception leaves main: the commands catch what their inputs and
+// outputs throw; what is left (memory exhausted, a bug) still gets a line
+// and an exit code instead of std::terminate's abort.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::cerr << "purkinje: error: out of memory\n";
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje: internal error: " << error.what() << "\n";
+  } catch (...) {
+    std::cerr << "purkinje: internal error: an unknown exception\n";
+  }
+  return kBadInput;
+}

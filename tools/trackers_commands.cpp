@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "output_checks.h"
 #include "tracker_optics.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
@@ -35,7 +36,9 @@ struct LabelledImage {
 };
 
 // The labels files the inputs name: a labels file itself, an image beside
-// its labels (same name, .json), or a folder (its .json files, in order).
+// its labels (same name, .json), or a folder (its .json files that have
+// an image of the same name beside them, in order: a score.json or any
+// other JSON file in the folder is no image's labels).
 std::vector<fs::path> labels_files(const std::vector<std::string>& inputs) {
   std::vector<fs::path> files;
   for (const std::string& input : inputs) {
@@ -43,10 +46,16 @@ std::vector<fs::path> labels_files(const std::vector<std::string>& inputs) {
     std::error_code ec;
     if (fs::is_directory(path, ec)) {
       std::vector<fs::path> in_folder;
+      std::set<fs::path> image_stems;
       for (const fs::directory_entry& e : fs::directory_iterator(path)) {
-        if (e.is_regular_file() && e.path().extension() == ".json") in_folder.push_back(e.path());
+        if (!e.is_regular_file()) continue;
+        if (e.path().extension() == ".json") in_folder.push_back(e.path());
+        else image_stems.insert(e.path().stem());
       }
-      if (in_folder.empty()) throw std::runtime_error(input + ": a folder without labels files (.json)");
+      std::erase_if(in_folder, [&](const fs::path& f) { return !image_stems.count(f.stem()); });
+      if (in_folder.empty()) {
+        throw std::runtime_error(input + ": a folder without labels files (.json beside an image of the same name)");
+      }
       std::sort(in_folder.begin(), in_folder.end());
       files.insert(files.end(), in_folder.begin(), in_folder.end());
     } else if (path.extension() == ".json") {
@@ -72,6 +81,25 @@ std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs) {
     images.push_back(std::move(image));
   }
   return images;
+}
+
+// The output folder may not be an input folder (or the folder of a labels
+// file or image given), nor hold the command's inputs under the names of
+// its outputs.
+std::optional<Refusal> check_outputs(const ScoreOutput& request, std::vector<std::string> files,
+                                     const std::vector<fs::path>& inputs) {
+  std::vector<fs::path> input_folders;
+  for (const std::string& input : request.inputs) {
+    const fs::path path(input);
+    std::error_code ec;
+    input_folders.push_back(fs::is_directory(path, ec) ? path : path.parent_path().empty() ? "." : path.parent_path());
+  }
+  for (const char* name : {"score.txt", "score.csv", "score.json"}) files.emplace_back(name);
+  std::vector<fs::path> given;
+  for (const fs::path& input : inputs) {
+    if (!input.empty()) given.push_back(input);
+  }
+  return check_output_folder(request.output_dir, input_folders, files, given);
 }
 
 trackers::GreyImage read_image(const LabelledImage& image) {
@@ -133,6 +161,10 @@ int write_outputs(const char* command, const ScoreOutput& request, const tracker
 }  // namespace
 
 int run_track(const TrackRequest& request) {
+  if (const auto refusal = check_outputs(request, {"detections.csv"}, {request.scene_file})) {
+    std::cerr << "purkinje track: error: " << refusal->message << "\n";
+    return refusal->exit_code;
+  }
   std::vector<LabelledImage> images;
   std::optional<Scene> rig;
   try {
@@ -201,6 +233,10 @@ int run_track(const TrackRequest& request) {
 }
 
 int run_score(const ScoreRequest& request) {
+  if (const auto refusal = check_outputs(request, {}, {request.detections_file})) {
+    std::cerr << "purkinje score: error: " << refusal->message << "\n";
+    return refusal->exit_code;
+  }
   std::vector<LabelledImage> images;
   std::map<std::string, trackers::Detections> detections;
   trackers::Scorer scorer({request.match_radius_px});

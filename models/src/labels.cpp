@@ -4,6 +4,7 @@
 #include "purkinje/models/labels.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -437,11 +438,25 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
   return out;
 }
 
+std::string unreplaceable(const std::filesystem::path& file) {
+  struct stat status {};
+  if (::lstat(file.c_str(), &status) != 0) return {};  // absent (or unreachable: the write will say)
+  if (S_ISREG(status.st_mode)) return {};
+  if (S_ISLNK(status.st_mode)) return "is a symbolic link: not replaced";
+  if (S_ISDIR(status.st_mode)) return "is a folder: not replaced";
+  if (S_ISCHR(status.st_mode)) return "is a character device: not replaced";
+  if (S_ISBLK(status.st_mode)) return "is a block device: not replaced";
+  if (S_ISFIFO(status.st_mode)) return "is a FIFO (named pipe): not replaced";
+  if (S_ISSOCK(status.st_mode)) return "is a socket: not replaced";
+  return "is not a regular file: not replaced";
+}
+
 void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
   static std::atomic<unsigned> counter{0};
   auto fail = [&file](const std::string& what, int error) {
     throw std::runtime_error(file.string() + ": " + what + ": " + std::strerror(error));
   };
+  if (const std::string why = unreplaceable(file); !why.empty()) throw std::runtime_error(file.string() + ": " + why);
 
   const std::filesystem::path directory = file.has_parent_path() ? file.parent_path() : ".";
   // A hidden sibling: same file system, so the rename is atomic.

@@ -27,6 +27,8 @@
 #include <system_error>
 #include <utility>
 
+#include "purkinje/models/labels.h"
+
 namespace purkinje::renderer {
 namespace {
 
@@ -351,7 +353,10 @@ void FileSet::add(std::filesystem::path target, Writer writer) {
 }
 
 void FileSet::commit() {
-  for (const Entry& e : entries_) check_directory(e.target);
+  for (const Entry& e : entries_) {
+    check_directory(e.target);
+    if (const std::string why = unreplaceable(e.target); !why.empty()) fail(e.target, why);
+  }
 
   std::vector<std::filesystem::path> temporaries;
   std::vector<std::filesystem::path> renamed;

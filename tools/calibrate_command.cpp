@@ -22,6 +22,7 @@
 #include "output_checks.h"
 #include "tracker_optics.h"
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
 #include "purkinje/trackers/cornea.h"

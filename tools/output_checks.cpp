@@ -2,6 +2,7 @@
 
 #include "commands.h"
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 
 namespace purkinje::tools {
 

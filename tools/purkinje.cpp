@@ -23,6 +23,7 @@
 #include "output_checks.h"
 #include "purkinje/models/eye_variation.h"
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/renderer/image_io.h"
@@ -544,6 +545,7 @@ int run(int argc, char** argv) {
 // outputs throw; what is left (memory exhausted, a bug) still gets a line
 // and an exit code instead of std::terminate's abort.
 int main(int argc, char** argv) {
+  purkinje::remove_temporaries_on_signals();
   try {
     return run(argc, argv);
   } catch (const std::bad_alloc&) {

@@ -18,6 +18,7 @@
 #include "output_checks.h"
 #include "tracker_optics.h"
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/trackers/detections_file.h"
 #include "purkinje/trackers/glints.h"

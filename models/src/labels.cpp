@@ -3,16 +3,10 @@
 
 #include "purkinje/models/labels.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstring>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
@@ -436,72 +430,6 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
     projected("rotation_center", v.rotation_center, eye.rotation_center);
   }
   return out;
-}
-
-std::string unreplaceable(const std::filesystem::path& file) {
-  struct stat status {};
-  if (::lstat(file.c_str(), &status) != 0) return {};  // absent (or unreachable: the write will say)
-  if (S_ISREG(status.st_mode)) return {};
-  if (S_ISLNK(status.st_mode)) return "is a symbolic link: not replaced";
-  if (S_ISDIR(status.st_mode)) return "is a folder: not replaced";
-  if (S_ISCHR(status.st_mode)) return "is a character device: not replaced";
-  if (S_ISBLK(status.st_mode)) return "is a block device: not replaced";
-  if (S_ISFIFO(status.st_mode)) return "is a FIFO (named pipe): not replaced";
-  if (S_ISSOCK(status.st_mode)) return "is a socket: not replaced";
-  return "is not a regular file: not replaced";
-}
-
-void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
-  static std::atomic<unsigned> counter{0};
-  auto fail = [&file](const std::string& what, int error) {
-    throw std::runtime_error(file.string() + ": " + what + ": " + std::strerror(error));
-  };
-  if (const std::string why = unreplaceable(file); !why.empty()) throw std::runtime_error(file.string() + ": " + why);
-
-  const std::filesystem::path directory = file.has_parent_path() ? file.parent_path() : ".";
-  // A hidden sibling: same file system, so the rename is atomic.
-  std::filesystem::path temporary;
-  int fd = -1;
-  for (int attempt = 0; fd < 0; ++attempt) {
-    // Appended piecewise: GCC 12 warns falsely (-Wrestrict) on a chain of operator+.
-    std::string name = ".";
-    name += file.filename().string();
-    name += ".tmp.";
-    name += std::to_string(::getpid());
-    name += '.';
-    name += std::to_string(counter++);
-    temporary = directory / name;
-    fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0 && (errno != EEXIST || attempt > 100)) fail("cannot create a temporary file", errno);
-  }
-
-  auto abandon = [&](const std::string& what) {
-    const int error = errno;
-    if (fd >= 0) ::close(fd);
-    ::unlink(temporary.c_str());
-    fail(what, error);
-  };
-  const char* data = contents.data();
-  std::size_t left = contents.size();
-  while (left > 0) {
-    const ssize_t written = ::write(fd, data, left);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      abandon("cannot write");
-    }
-    data += written;
-    left -= static_cast<std::size_t>(written);
-  }
-  if (::fsync(fd) != 0) abandon("cannot flush to disk");
-  const int closed = ::close(fd);
-  fd = -1;
-  if (closed != 0) abandon("cannot close");
-  if (::rename(temporary.c_str(), file.c_str()) != 0) abandon("cannot replace");
-  // Make the rename itself durable; a failure here loses nothing written.
-  if (const int dir = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
-  }
 }
 
 }  // namespace purkinje

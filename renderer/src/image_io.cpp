@@ -27,7 +27,7 @@
 #include <system_error>
 #include <utility>
 
-#include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -292,29 +292,6 @@ void check_directory(const std::filesystem::path& target) {
     throw OutputError(directory_label(directory) + ": not a directory");
 }
 
-// Reserves a hidden, unused name beside the target. Creating it here
-// (O_EXCL) rather than in the writer makes the name ours and reports an
-// unwritable folder before any writer runs.
-std::filesystem::path reserve_temporary(const std::filesystem::path& target) {
-  static std::atomic<unsigned long> counter{0};
-  const std::filesystem::path directory = directory_of(target);
-  for (int attempt = 0;; ++attempt) {
-    std::string name = ".";
-    name += target.filename().string();
-    name += ".tmp-";
-    name += std::to_string(::getpid());
-    name += '-';
-    name += std::to_string(counter++);
-    std::filesystem::path temporary = directory / name;
-    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0) {
-      ::close(fd);
-      return temporary;
-    }
-    if (errno != EEXIST || attempt > 100) fail(target, "cannot write: " + errno_message(errno));
-  }
-}
-
 // Flushes a finished temporary to the disk: a full or failing device may
 // only report at this point.
 void flush_to_disk(const std::filesystem::path& temporary, const std::filesystem::path& target) {
@@ -361,14 +338,21 @@ void FileSet::commit() {
   std::vector<std::filesystem::path> temporaries;
   std::vector<std::filesystem::path> renamed;
   auto roll_back = [&] {
-    for (const auto& t : temporaries) ::unlink(t.c_str());
+    for (const auto& t : temporaries) {
+      ::unlink(t.c_str());
+      release_temporary(t);
+    }
     for (const auto& t : renamed) ::unlink(t.c_str());
   };
 
   try {
     temporaries.reserve(entries_.size());
     for (const Entry& e : entries_) {
-      temporaries.push_back(reserve_temporary(e.target));
+      try {
+        temporaries.push_back(create_temporary(e.target));
+      } catch (const std::exception& error) {
+        fail(e.target, reason_from(error.what(), e.target));
+      }
       const std::filesystem::path& temporary = temporaries.back();
       try {
         e.writer(temporary);
@@ -378,11 +362,14 @@ void FileSet::commit() {
         fail(e.target, "the writer failed with an unknown exception");
       }
       flush_to_disk(temporary, e.target);
+      stop_point("temporary_written");
     }
     for (std::size_t i = 0; i < entries_.size(); ++i) {
       if (::rename(temporaries[i].c_str(), entries_[i].target.c_str()) != 0)
         fail(entries_[i].target, "cannot rename into place: " + errno_message(errno));
+      release_temporary(temporaries[i]);
       renamed.push_back(entries_[i].target);
+      stop_point("renamed");
     }
   } catch (...) {
     roll_back();

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 #include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/render.h"
 

@@ -1,4 +1,5 @@
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 
 #include <gtest/gtest.h>
 

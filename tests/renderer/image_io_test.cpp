@@ -357,7 +357,7 @@ TEST(FileSet, CommitWritesEveryFileAndLeavesNoTemporary) {
   ASSERT_EQ(temporaries.size(), 3u);
   EXPECT_EQ(temporaries[0].parent_path(), dir.path());
   EXPECT_TRUE(
-      starts_with(temporaries[0].filename(), ".image.png.tmp-" + std::to_string(::getpid())))
+      starts_with(temporaries[0].filename(), ".image.png.tmp." + std::to_string(::getpid()) + "."))
       << temporaries[0];
 }
 
@@ -454,14 +454,32 @@ TEST(FileSet, WriterThatWritesNothingFails) {
   EXPECT_TRUE(dir.entries().empty());
 }
 
-TEST(FileSet, FailedRenameRemovesTargetsAlreadyRenamed) {
+TEST(FileSet, RefusesToReplaceAnythingButARegularFileBeforeWriting) {
   ScratchDirectory dir;
-  // A non-empty directory where the second file should go: rename(2)
-  // refuses to replace it, after the first file was already in place.
   fs::create_directories(dir / "b.png" / "inside");
   FileSet set;
-  set.add(dir / "a.png", [](const fs::path& t) { write_png(t, sensor_image(1, 1, 8, {1})); });
+  bool wrote = false;
+  set.add(dir / "a.png", [&](const fs::path& t) {
+    wrote = true;
+    write_png(t, sensor_image(1, 1, 8, {1}));
+  });
   set.add(dir / "b.png", [](const fs::path& t) { write_png(t, sensor_image(1, 1, 8, {2})); });
+  EXPECT_EQ(message_of_output_error(set), (dir / "b.png").string() + ": is a folder: not replaced");
+  EXPECT_FALSE(wrote);
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"b.png"}));
+}
+
+TEST(FileSet, FailedRenameRemovesTargetsAlreadyRenamed) {
+  ScratchDirectory dir;
+  // A non-empty directory appears where the second file should go after
+  // the checks: rename(2) refuses to replace it, after the first file was
+  // already in place.
+  FileSet set;
+  set.add(dir / "a.png", [](const fs::path& t) { write_png(t, sensor_image(1, 1, 8, {1})); });
+  set.add(dir / "b.png", [&](const fs::path& t) {
+    write_png(t, sensor_image(1, 1, 8, {2}));
+    fs::create_directories(dir / "b.png" / "inside");
+  });
   const std::string message = message_of_output_error(set);
   EXPECT_TRUE(starts_with(message, (dir / "b.png").string() + ": cannot rename into place: "))
       << message;

@@ -12,6 +12,7 @@
 
 #include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
+#include "purkinje/models/output_file.h"
 
 namespace purkinje::trackers {
 

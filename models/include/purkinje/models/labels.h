@@ -46,17 +46,4 @@ ImageLabels read_image_labels(const std::filesystem::path& file);
 // folder the image is looked for in.
 ImageLabels parse_image_labels(std::string_view text, const std::filesystem::path& file);
 
-// Writes `contents` to a temporary file in the same directory, flushes it
-// to disk and renames it over `file`, so readers see the old file or the
-// whole new one, never a part. Throws std::runtime_error naming the path
-// and the system's reason; no temporary file is left behind. Refuses
-// (before writing anything) a `file` that unreplaceable() names.
-void write_file_atomically(const std::filesystem::path& file, const std::string& contents);
-
-// Why an output may not be renamed over `file`: it exists and is not a
-// regular file ("is a character device", for /dev/full; a FIFO, socket,
-// folder or symbolic link alike). Empty when `file` is absent or a
-// regular file. Run as root, rename() would replace a device node.
-std::string unreplaceable(const std::filesystem::path& file);
-
 }  // namespace purkinje

@@ -1,0 +1,53 @@
+#pragma once
+// Writing output files so that nothing is ever lost or half written:
+// every output goes to a hidden temporary beside its target, is flushed
+// and renamed into place; nothing is renamed over anything but a regular
+// file; temporaries are removed on failure and, once
+// remove_temporaries_on_signals() is installed, on SIGINT and SIGTERM.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace purkinje {
+
+// Writes `contents` to a temporary file in the same directory, flushes it
+// to disk and renames it over `file`, so readers see the old file or the
+// whole new one, never a part. Throws std::runtime_error naming the path
+// and the system's reason; no temporary file is left behind. Refuses
+// (before writing anything) a `file` that unreplaceable() names.
+void write_file_atomically(const std::filesystem::path& file, const std::string& contents);
+
+// Why an output may not be renamed over `file`: it exists and is not a
+// regular file ("is a character device", for /dev/full; a FIFO, socket,
+// folder or symbolic link alike). Empty when `file` is absent or a
+// regular file. Run as root, rename() would replace a device node.
+std::string unreplaceable(const std::filesystem::path& file);
+
+// A new, empty, hidden temporary beside `target`, created exclusively:
+// ".NAME.tmp.PID.N" in the target's folder (the same file system, so
+// renaming it onto the target is atomic). It is registered for removal
+// on SIGINT/SIGTERM until release_temporary(). Throws std::runtime_error
+// naming the target when the folder does not take it.
+std::filesystem::path create_temporary(const std::filesystem::path& target);
+// The temporary was renamed into place or removed: no longer the signal
+// handler's to remove.
+void release_temporary(const std::filesystem::path& temporary);
+// Whether `name` (a file name) is one of create_temporary()'s, of any
+// process: what a resumed run may remove.
+bool is_temporary_name(std::string_view name);
+
+// Installs handlers for SIGINT and SIGTERM that remove every registered
+// temporary and exit with 128 + the signal (130, 143), as a shell reports
+// a process the signal ended. For the command line; a library leaves
+// signals to its host.
+void remove_temporaries_on_signals();
+
+// A point where a test may stop the process, as a kill at that moment
+// would: when PURKINJE_STOP_AT is "EVENT:N:SIGNAL" (e.g. "renamed:7:KILL",
+// "temporary_written:3:TERM") the N-th call with that event raises the
+// signal. Unset, it costs a load and a comparison.
+void stop_point(const char* event);
+
+}  // namespace purkinje

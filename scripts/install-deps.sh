@@ -8,7 +8,7 @@ packages=(
   cmake ninja-build g++ pkg-config ccache
   libglm-dev libceres-dev libeigen3-dev nlohmann-json3-dev libcli11-dev
   libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libtbb-dev
-  libopencv-dev
+  libopencv-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gcovr python3
 )

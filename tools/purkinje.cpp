@@ -1,10 +1,16 @@
 // The purkinje command line: argument parsing and exit codes only; the
 // work is done by the libraries. Documented in docs/cli.md.
 
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <charconv>
 #include <cstdint>
 #include <cstdio>
@@ -22,6 +28,7 @@
 #include "commands.h"
 #include "output_checks.h"
 #include "purkinje/models/eye_variation.h"
+#include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
@@ -138,6 +145,7 @@ struct RenderRequest {
   int threads = 0;
   int variations = 0;  // 0: the scene as it is
   std::uint64_t variation_seed = 1;
+  bool resume = false;  // continue a killed --variations run in the same folder
   double max_gaze_deg = 30;
   double min_pupil_mm = 1, max_pupil_mm = 4;
 };
@@ -223,6 +231,65 @@ int render_and_write(const RenderRequest& request, const purkinje::Scene& scene,
   return kOk;
 }
 
+// A hidden temporary a killed run left: its process is gone.
+void remove_stale_temporaries(const std::filesystem::path& dir) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (!purkinje::is_temporary_name(name)) continue;
+    const std::size_t last = name.rfind('.'), before = name.rfind('.', last - 1);
+    const long pid = std::strtol(name.c_str() + before + 1, nullptr, 10);
+    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) std::filesystem::remove(e.path(), ec);
+  }
+}
+
+// Whether every camera's files of a variation are in place and consistent:
+// labels that this run would write (seed, mode, samples) whose recorded
+// size and CRC-32 of the PNG and EXR match the files beside them.
+bool unit_complete(const std::filesystem::path& dir, const std::string& stem_prefix, const purkinje::Scene& scene,
+                   const std::vector<int>& cameras, const purkinje::renderer::RenderOptions& options) {
+  using json = nlohmann::json;
+  for (int camera : cameras) {
+    const std::string stem = file_stem(stem_prefix, scene.cameras[camera].name());
+    try {
+      const json labels = json::parse(purkinje::read_input_file(dir / (stem + ".json"), purkinje::kMaxLabelsFileBytes,
+                                                                "a labels file"));
+      const json& render = labels.at("render");
+      if (render.at("seed").get<std::uint64_t>() != options.seed ||
+          render.at("mode").get<std::string>() != purkinje::renderer::to_string(options.mode) ||
+          render.at("samples_per_pixel").get<int>() != options.samples_per_pixel ||
+          render.at("edge_samples_per_pixel").get<int>() != purkinje::renderer::edge_samples_per_pixel(options)) {
+        return false;
+      }
+      const json& files = render.at("files");
+      for (const char* kind : {"image", "exr"}) {
+        const std::string name = files.at(kind).get<std::string>();
+        const purkinje::FileCheck check =
+            purkinje::file_check_of(purkinje::read_input_file(dir / name, purkinje::kMaxImageFileBytes, "an image file"));
+        if (name != stem + (std::string(kind) == "image" ? ".png" : ".exr") ||
+            files.at(std::string(kind) + "_bytes").get<std::uintmax_t>() != check.bytes ||
+            files.at(std::string(kind) + "_crc32").get<std::string>() != purkinje::crc32_text(check.crc32)) {
+          return false;
+        }
+      }
+    } catch (const std::exception&) {
+      return false;  // missing, cut short, or not ours: rendered again
+    }
+  }
+  return true;
+}
+
+// Appends a line to the index and flushes it to the disk.
+void append_line(const std::filesystem::path& file, const std::string& line) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(file.string() + ": cannot append: " + std::strerror(errno));
+  const ssize_t written = ::write(fd, line.data(), line.size());
+  const int error = errno;
+  const bool ok = written == static_cast<ssize_t>(line.size()) && ::fsync(fd) == 0;
+  ::close(fd);
+  if (!ok) throw std::runtime_error(file.string() + ": cannot append: " + std::strerror(error));
+}
+
 int run_render(const RenderRequest& request) {
   namespace r = purkinje::renderer;
   purkinje::Scene scene;
@@ -282,31 +349,92 @@ int run_render(const RenderRequest& request) {
   if (variations.empty()) return render_and_write(request, scene, cameras, scene.name, options, "");
 
   // Each variation's files are written as soon as it is rendered (a set
-  // of hundreds would not fit in memory), each all or nothing; the list
-  // of variations last.
+  // of hundreds would not fit in memory), each all or nothing, the labels
+  // last with their images' checks; the index grows a line per finished
+  // variation, and is written whole at the end.
   const int digits = std::max(4, static_cast<int>(std::to_string(variations.size() - 1).size()));
-  std::ostringstream list;
-  list << "index,stem,seed,gaze_turn_deg,turn_direction_deg,pupil_radius_mm\n" << std::setprecision(10);
-  for (std::size_t k = 0; k < variations.size(); ++k) {
+  const std::string prefix = (scene.name.empty() ? std::string("scene") : scene.name) + "_v";
+  const std::filesystem::path dir(request.output_dir);
+  const std::filesystem::path index_file = dir / "variations.csv";
+  const std::string header = "index,stem,seed,gaze_turn_deg,turn_direction_deg,pupil_radius_mm\n";
+  const auto stem_of = [&](std::size_t k) {
     std::string index = std::to_string(k);
     index.insert(0, static_cast<std::size_t>(digits) - index.size(), '0');
-    const std::string stem = (scene.name.empty() ? std::string("scene") : scene.name) + "_v" + index;
-    options.seed = request.seed + k;  // the noise differs from image to image
+    return prefix + index;
+  };
+  const auto line_of = [&](std::size_t k) {
     const purkinje::EyeVariation& v = variations[k];
-    const int code = render_and_write(request, purkinje::with_eye_variation(scene, v), cameras, stem, options,
-                                      "variation " + std::to_string(k) + ", ");
-    if (code != kOk) return code;
-    list << k << ',' << stem << ',' << options.seed << ',' << v.gaze_turn_rad * 180 / std::numbers::pi << ','
-         << v.turn_direction_rad * 180 / std::numbers::pi << ',' << v.pupil_radius_mm << '\n';
-  }
-  const std::filesystem::path list_file = std::filesystem::path(request.output_dir) / "variations.csv";
+    std::ostringstream line;
+    line << std::setprecision(10) << k << ',' << stem_of(k) << ',' << request.seed + k << ','
+         << v.gaze_turn_rad * 180 / std::numbers::pi << ',' << v.turn_direction_rad * 180 / std::numbers::pi << ','
+         << v.pupil_radius_mm << '\n';
+    return line.str();
+  };
+  std::map<std::size_t, std::string> indexed;  // --resume: the lines the killed run wrote
   try {
-    purkinje::write_file_atomically(list_file, list.str());
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
+    if (request.resume) {
+      if (std::filesystem::exists(index_file)) {
+        const std::string text = purkinje::read_input_file(index_file, std::uintmax_t{1} << 32, "an index");
+        if (text.rfind(header, 0) != 0) {
+          std::cerr << "purkinje render: error: " << index_file.string()
+                    << ": not the index of a --variations set: --resume continues only such a set\n";
+          return kUsageError;
+        }
+        // Whole lines only: a kill may have cut the last one short.
+        for (std::size_t at = header.size(), end; (end = text.find('\n', at)) != std::string::npos; at = end + 1) {
+          const std::string line = text.substr(at, end + 1 - at);
+          indexed[std::strtoull(line.c_str(), nullptr, 10)] = line;
+        }
+      }
+    } else {
+      purkinje::write_file_atomically(index_file, header);
+    }
   } catch (const std::exception& error) {
     std::cerr << "purkinje render: error: " << error.what() << "\n";
     return kOutputError;
   }
-  std::cout << "wrote " << list_file.string() << "\n";
+  for (const auto& [k, line] : indexed) {
+    if (k >= variations.size() || line != line_of(k)) {
+      std::cerr << "purkinje render: error: " << index_file.string() << ": variation " << k
+                << " was made with other options (" << line.substr(0, line.size() - 1)
+                << "): --resume needs the options of the run it continues\n";
+      return kUsageError;
+    }
+  }
+  if (request.resume) remove_stale_temporaries(dir);
+  std::size_t resumed = 0;
+  for (std::size_t k = 0; k < variations.size(); ++k) {
+    options.seed = request.seed + k;  // the noise differs from image to image
+    if (request.resume && unit_complete(dir, stem_of(k), scene, cameras, options)) {
+      ++resumed;
+    } else {
+      const int code = render_and_write(request, purkinje::with_eye_variation(scene, variations[k]), cameras,
+                                        stem_of(k), options, "variation " + std::to_string(k) + ", ");
+      if (code != kOk) return code;
+    }
+    purkinje::stop_point("unit_written");
+    if (!indexed.count(k)) {
+      try {
+        append_line(index_file, line_of(k));
+      } catch (const std::exception& error) {
+        std::cerr << "purkinje render: error: " << error.what() << "\n";
+        return kOutputError;
+      }
+    }
+  }
+  std::string list = header;
+  for (std::size_t k = 0; k < variations.size(); ++k) list += line_of(k);
+  try {
+    purkinje::write_file_atomically(index_file, list);
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje render: error: " << error.what() << "\n";
+    return kOutputError;
+  }
+  if (request.resume) std::cout << "resumed: " << resumed << " of " << variations.size() << " variations were complete\n";
+  std::cout << "wrote " << index_file.string() << "\n";
   return kOk;
 }
 
@@ -403,6 +531,9 @@ int run(int argc, char** argv) {
                      "centre of rotation and its pupil resized, at random (0: the scene as it is)")
       ->check(CLI::Range(0, 10000000))
       ->capture_default_str();
+  render->add_flag("--resume", render_request.resume,
+                   "Continue a killed --variations run in the same folder with the same options:\n"
+                   "complete variations are kept, the rest rendered again (the same bytes as one run)");
   render->add_option("--variation-seed", render_request.variation_seed, "Seed of the variations' draws")
       ->check(kSeed)
       ->capture_default_str();
@@ -501,6 +632,10 @@ int run(int argc, char** argv) {
   }
   if (*truth) return run_truth(truth_request);
   if (*render) {
+    if (render_request.resume && render_request.variations == 0) {
+      std::cerr << "purkinje render: --resume continues a --variations run: give --variations N\n";
+      return kUsageError;
+    }
     if (render_request.min_pupil_mm > render_request.max_pupil_mm) {
       std::cerr << "purkinje render: --min-pupil-mm " << render_request.min_pupil_mm << " is above --max-pupil-mm "
                 << render_request.max_pupil_mm << "\n";

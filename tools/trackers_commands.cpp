@@ -17,6 +17,7 @@
 #include "commands.h"
 #include "output_checks.h"
 #include "tracker_optics.h"
+#include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
@@ -104,6 +105,19 @@ std::optional<Refusal> check_outputs(const ScoreOutput& request, std::vector<std
 }
 
 trackers::GreyImage read_image(const LabelledImage& image) {
+  // Labels record their image's size and CRC-32: an image that differs is
+  // another run's (a run killed between renaming an image and its labels).
+  if (image.labels.image_check) {
+    const FileCheck found =
+        file_check_of(read_input_file(image.labels.image, kMaxImageFileBytes, "an image file"));
+    if (found != *image.labels.image_check) {
+      throw std::runtime_error(image.labels.image.string() + ": does not match its labels (" +
+                               std::to_string(found.bytes) + " bytes, CRC-32 " + crc32_text(found.crc32) +
+                               "; the labels say " + std::to_string(image.labels.image_check->bytes) + " bytes, " +
+                               crc32_text(image.labels.image_check->crc32) +
+                               "): a unit a run left half replaced; render it again (render --resume)");
+    }
+  }
   trackers::GreyImage pixels = trackers::read_grey_image(image.labels.image, image.labels.bits);
   if (pixels.width != image.labels.width_px || pixels.height != image.labels.height_px) {
     throw std::runtime_error(image.labels.image.string() + ": " + std::to_string(pixels.width) + " x " +

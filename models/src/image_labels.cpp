@@ -1,7 +1,9 @@
 // Reading one rendered image's labels back (for scoring): the image-plane
 // fields only, each checked, every error naming the file, key and value.
 
+#include <charconv>
 #include <cmath>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -61,6 +63,24 @@ class Reader {
     }
     return static_cast<int>(v.get<long long>());
   }
+  // A file's size and CRC-32 as "<kind>_bytes" and "<kind>_crc32" (eight
+  // hexadecimal digits), or nothing when neither is there (labels written
+  // before they were).
+  std::optional<FileCheck> file_check(const json& files, const std::string& path, const std::string& kind) const {
+    const std::string bytes_key = kind + "_bytes", crc_key = kind + "_crc32";
+    if (!files.contains(bytes_key) && !files.contains(crc_key)) return std::nullopt;
+    const json& bytes = member(files, path, bytes_key.c_str());
+    const json& crc = member(files, path, crc_key.c_str());
+    if (!bytes.is_number_unsigned()) fail(join(path, bytes_key.c_str()), &bytes, "must be a byte count");
+    const std::string text = crc.is_string() ? crc.get<std::string>() : "";
+    FileCheck check;
+    check.bytes = bytes.get<std::uintmax_t>();
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), check.crc32, 16);
+    if (text.size() != 8 || error != std::errc() || end != text.data() + text.size()) {
+      fail(join(path, crc_key.c_str()), &crc, "must be a CRC-32 as eight hexadecimal digits");
+    }
+    return check;
+  }
   PathStatus status(const json& object, const std::string& path) const {
     const json& v = member(object, path, "status");
     if (v.is_string()) {
@@ -110,6 +130,7 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
     r.fail("render.files.image", &image, "must be a file name");
   }
   labels.image = file.parent_path() / image.get<std::string>();
+  labels.image_check = r.file_check(files, "render.files", "image");
   labels.bits = r.integer(r.object(render, "render", "sensor"), "render.sensor", "bits", 1, 16);
   const int camera = r.integer(render, "render", "camera", 0, 1000000);
   const json& cameras = r.array(root, "", "cameras");

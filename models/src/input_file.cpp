@@ -3,8 +3,11 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <iomanip>
 #include <sstream>
@@ -102,6 +105,24 @@ std::string read_input_file(const std::filesystem::path& file, std::uintmax_t ma
   }
   ::close(fd);
   return contents;
+}
+
+FileCheck file_check_of(std::string_view contents) {
+  // zlib's crc32 takes at most 4 GB per call (uInt lengths).
+  uLong crc = ::crc32(0L, Z_NULL, 0);
+  std::size_t at = 0;
+  while (at < contents.size()) {
+    const std::size_t n = std::min<std::size_t>(contents.size() - at, std::size_t{1} << 30);
+    crc = ::crc32(crc, reinterpret_cast<const Bytef*>(contents.data() + at), static_cast<uInt>(n));
+    at += n;
+  }
+  return {contents.size(), static_cast<std::uint32_t>(crc)};
+}
+
+std::string crc32_text(std::uint32_t crc32) {
+  char text[9];
+  std::snprintf(text, sizeof text, "%08x", crc32);
+  return text;
 }
 
 }  // namespace purkinje

@@ -23,6 +23,7 @@
 #include <memory>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -318,6 +319,13 @@ std::string reason_from(const std::string& what, const std::filesystem::path& te
 
 }  // namespace
 
+const std::filesystem::path& FileSet::temporary_of(const std::filesystem::path& target) const {
+  for (std::size_t i = 0; i < written_.size(); ++i) {
+    if (entries_[i].target == target) return written_[i];
+  }
+  throw std::logic_error("FileSet::temporary_of: " + target.string() + " is not written yet");
+}
+
 void FileSet::add(std::filesystem::path target, Writer writer) {
   if (!target.has_filename())
     throw std::invalid_argument("FileSet: target \"" + target.string() + "\" names no file");
@@ -362,6 +370,7 @@ void FileSet::commit() {
         fail(e.target, "the writer failed with an unknown exception");
       }
       flush_to_disk(temporary, e.target);
+      written_.push_back(temporary);
       stop_point("temporary_written");
     }
     for (std::size_t i = 0; i < entries_.size(); ++i) {
@@ -372,9 +381,11 @@ void FileSet::commit() {
       stop_point("renamed");
     }
   } catch (...) {
+    written_.clear();
     roll_back();
     throw;
   }
+  written_.clear();
 
   // Make the renames durable. The set is complete and in place by now, so
   // a failure here is not reported: there is nothing left to undo.

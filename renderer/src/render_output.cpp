@@ -5,6 +5,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/renderer/image_io.h"
@@ -57,10 +58,9 @@ bool saturates(const RenderResult& result, const GlintImage& g, const Camera& ca
   return false;
 }
 
-}  // namespace
-
-std::string render_labels_json(const Scene& scene, const RenderResult& result,
-                               const RenderOptions& options, const RenderFiles& files) {
+// The labels without the image files' checks (added once they are written).
+json labels_document(const Scene& scene, const RenderResult& result, const RenderOptions& options,
+                     const RenderFiles& files) {
   json labels = json::parse(truth_to_json(scene, result.truth));
   const Camera& camera = scene.cameras[result.camera];
   json render = json::object();
@@ -90,7 +90,20 @@ std::string render_labels_json(const Scene& scene, const RenderResult& result,
   }
   render["glints"] = glints;
   labels["render"] = render;
-  return labels.dump(2) + "\n";
+  return labels;
+}
+
+void add_check(json& files, const std::string& kind, const std::filesystem::path& file) {
+  const FileCheck check = file_check_of(read_input_file(file, kMaxImageFileBytes, "an image file"));
+  files[kind + "_bytes"] = check.bytes;
+  files[kind + "_crc32"] = crc32_text(check.crc32);
+}
+
+}  // namespace
+
+std::string render_labels_json(const Scene& scene, const RenderResult& result,
+                               const RenderOptions& options, const RenderFiles& files) {
+  return labels_document(scene, result, options, files).dump(2) + "\n";
 }
 
 RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std::string& stem,
@@ -101,13 +114,19 @@ RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std
   planes->push_back({"electrons", result.electrons});
   for (const NamedPlane& p : result.aovs) planes->push_back(p);
   auto sensor = std::make_shared<SensorImage>(result.sensor);
-  auto labels = std::make_shared<std::string>(render_labels_json(scene, result, options, files));
+  auto labels = std::make_shared<json>(labels_document(scene, result, options, files));
   set.add(files.image, [sensor](const std::filesystem::path& t) { write_png(t, *sensor); });
   set.add(files.exr, [planes](const std::filesystem::path& t) { write_exr(t, *planes); });
-  set.add(files.labels, [labels](const std::filesystem::path& t) {
+  // Labels last, with the size and CRC-32 of the image files as written:
+  // renamed into place after them, they tell a complete unit from one a
+  // kill left half replaced (docs/labels.md).
+  set.add(files.labels, [labels, files, &set](const std::filesystem::path& t) {
+    json& names = (*labels)["render"]["files"];
+    add_check(names, "image", set.temporary_of(files.image));
+    add_check(names, "exr", set.temporary_of(files.exr));
     // write_file_atomically renames its own temporary onto `t`; FileSet
     // then renames `t` into place with the others.
-    write_file_atomically(t, *labels);
+    write_file_atomically(t, labels->dump(2) + "\n");
   });
   return files;
 }

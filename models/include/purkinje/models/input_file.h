@@ -42,4 +42,16 @@ std::string unreadable_input(const std::filesystem::path& file, std::uintmax_t m
 // /proc report no size). Throws InputFileError.
 std::string read_input_file(const std::filesystem::path& file, std::uintmax_t max_bytes, std::string_view kind);
 
+// A file's size and CRC-32 (zlib's): what a labels file records of its
+// image files, so that a reader tells a complete unit from a stale or
+// partly replaced one (an interrupted run's new PNG beside old labels).
+struct FileCheck {
+  std::uintmax_t bytes = 0;
+  std::uint32_t crc32 = 0;
+  bool operator==(const FileCheck&) const = default;
+};
+FileCheck file_check_of(std::string_view contents);
+// The CRC as labels write it: eight lower-case hexadecimal digits.
+std::string crc32_text(std::uint32_t crc32);
+
 }  // namespace purkinje

@@ -5,10 +5,12 @@
 // not exist for a feature's status is null in JSON and empty in CSV.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "purkinje/models/input_file.h"
 #include "purkinje/models/scene.h"
 #include "purkinje/models/truth.h"
 
@@ -29,6 +31,9 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth);
 // the image (docs/labels.md), read back for scoring detectors.
 struct ImageLabels {
   std::filesystem::path image;  // the image file, in the labels file's folder
+  // What the image file must be (size, CRC-32) for these labels to be its
+  // own; absent in labels written before the check was.
+  std::optional<FileCheck> image_check;
   int width_px = 0, height_px = 0;
   int bits = 8;  // the sensor's significant bits (a PNG of more than 8 keeps them in its words' high bits)
   // The views of this image's camera. Only the image-plane fields are

@@ -48,7 +48,13 @@ class FileSet {
  public:
   using Writer = std::function<void(const std::filesystem::path& temporary)>;
   void add(std::filesystem::path target, Writer writer);
+  // Runs the writers in the order added, then renames in that order: a
+  // file added last is in place only when all the others are.
   void commit();
+  // During commit(), for a writer: the temporary of a target added before
+  // it, already written and flushed (labels record their images'
+  // checksums from them). Throws std::logic_error otherwise.
+  const std::filesystem::path& temporary_of(const std::filesystem::path& target) const;
 
  private:
   struct Entry {
@@ -56,6 +62,7 @@ class FileSet {
     Writer writer;
   };
   std::vector<Entry> entries_;
+  std::vector<std::filesystem::path> written_;  // during commit(): the temporaries written so far
 };
 
 }  // namespace purkinje::renderer

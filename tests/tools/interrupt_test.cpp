@@ -1,0 +1,165 @@
+// A labelled set's render killed at many points (SIGKILL, which nothing
+// can catch, and SIGTERM, which purkinje handles), then continued with
+// --resume: the folder ends byte for byte as one uninterrupted run leaves
+// it, with no temporary left. The kill points are exact: PURKINJE_STOP_AT
+// makes the process raise the signal at the N-th event of a kind
+// (models/output_file.h, stop_point).
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kExecutable = PURKINJE_EXECUTABLE;
+const fs::path kSourceDir = PURKINJE_SOURCE_DIR;
+constexpr int kVariations = 50;
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::map<std::string, std::string> contents(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) files[e.path().filename().string()] = read(e.path());
+  return files;
+}
+
+struct Status {
+  bool exited = false;
+  int code = -1;    // when exited
+  int signal = 0;   // when killed by a signal
+};
+
+// `purkinje render` of the tiny scene's set into `dir`, with `extra`
+// arguments and `environment` ("VAR=value", or empty).
+Status render_set(const fs::path& dir, const std::string& extra, const std::string& environment = "") {
+  const std::string command = (environment.empty() ? "" : "env " + environment + " ") + "'" + kExecutable.string() +
+                              "' render '" + (kSourceDir / "tests/data/tiny_remote.json").string() + "' -o '" +
+                              dir.string() + "' --variations " + std::to_string(kVariations) + " " + extra +
+                              " > /dev/null 2>&1";
+  const int status = std::system(command.c_str());
+  Status s;
+  // std::system runs sh -c: a child killed by a signal shows as 128 + signal.
+  if (WIFEXITED(status)) {
+    s.exited = true;
+    s.code = WEXITSTATUS(status);
+    if (s.code > 128) s.signal = s.code - 128;
+  }
+  return s;
+}
+
+class Interrupted : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = new fs::path(fs::temp_directory_path() / ("purkinje_interrupt_" + std::to_string(::getpid())));
+    fs::remove_all(*root_);
+    fs::create_directories(*root_);
+    ASSERT_EQ(render_set(*root_ / "reference", "").code, 0);
+    reference_ = new std::map<std::string, std::string>(contents(*root_ / "reference"));
+    ASSERT_EQ(reference_->size(), 3u * kVariations + 1);  // PNG, EXR, labels each, and the index
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*root_);
+    delete reference_;
+    delete root_;
+  }
+
+  // Kills a run at `stop` ("EVENT:N:SIGNAL"), checks what the signal left,
+  // resumes, and checks the result against the uninterrupted run.
+  void kill_and_resume(const std::string& stop, int signal) {
+    SCOPED_TRACE(stop);
+    const fs::path dir = *root_ / (::testing::UnitTest::GetInstance()->current_test_info()->name() +
+                                   std::to_string(++runs_));
+    const Status killed = render_set(dir, "", "PURKINJE_STOP_AT=" + stop);
+    EXPECT_EQ(killed.signal, signal) << "the run was not stopped where asked (exit " << killed.code << ")";
+    const auto partial = contents(dir);
+    EXPECT_FALSE(partial == *reference_) << "the run finished: the stop point was never reached";
+    bool temporaries = false;
+    for (const auto& [name, bytes] : partial) temporaries = temporaries || name.find(".tmp.") != std::string::npos;
+    // SIGTERM removes the temporaries itself; after SIGKILL --resume does.
+    if (signal == SIGTERM) {
+      EXPECT_FALSE(temporaries) << "SIGTERM left a temporary";
+    }
+    // The index holds the variations finished so far, written as they finish.
+    EXPECT_EQ(read(dir / "variations.csv").rfind("index,stem,seed,", 0), 0u);
+
+    const Status resumed = render_set(dir, "--resume");
+    EXPECT_EQ(resumed.code, 0);
+    const auto final_contents = contents(dir);
+    EXPECT_EQ(final_contents.size(), reference_->size());
+    for (const auto& [name, bytes] : *reference_) {
+      const auto it = final_contents.find(name);
+      ASSERT_NE(it, final_contents.end()) << name << " missing";
+      EXPECT_TRUE(it->second == bytes) << name << " differs from the uninterrupted run's";
+    }
+  }
+
+  static fs::path* root_;
+  static std::map<std::string, std::string>* reference_;
+  int runs_ = 0;
+};
+
+fs::path* Interrupted::root_ = nullptr;
+std::map<std::string, std::string>* Interrupted::reference_ = nullptr;
+
+// Renames: 3 per variation (PNG, EXR, labels last). temporary_written counts
+// the index's first write and each labels file's own temporary too.
+TEST_F(Interrupted, SigkillAtSixPointsThenResumeGivesTheBytesOfOneRun) {
+  for (const char* stop : {"renamed:1:KILL",              // between the first unit's PNG and EXR
+                           "renamed:2:KILL",              // between its EXR and labels
+                           "temporary_written:40:KILL",   // a unit's files written, none renamed
+                           "unit_written:17:KILL",        // a unit in place, its index line not yet
+                           "renamed:89:KILL",             // between a later unit's PNG and EXR
+                           "renamed:150:KILL"}) {         // every unit in place, the index not yet whole
+    kill_and_resume(stop, SIGKILL);
+  }
+}
+
+TEST_F(Interrupted, SigtermAtSixPointsRemovesTemporariesAndResumeGivesTheBytesOfOneRun) {
+  for (const char* stop : {"renamed:1:TERM", "renamed:2:TERM", "temporary_written:40:TERM", "unit_written:17:TERM",
+                           "renamed:89:TERM", "renamed:150:TERM"}) {
+    kill_and_resume(stop, SIGTERM);
+  }
+}
+
+// A set rendered with other seeds, then a new run killed between the first
+// unit's renames: its new PNG lies beside the old run's EXR and labels.
+// The labels' checks tell it; --resume renders that unit again, and track
+// refuses the mixed unit rather than score it.
+TEST_F(Interrupted, AHalfReplacedUnitIsToldByItsLabelsChecks) {
+  const fs::path dir = *root_ / "mixed";
+  ASSERT_EQ(render_set(dir, "--seed 1000").code, 0);
+  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=renamed:1:KILL").signal, SIGKILL);
+  const std::string track = "'" + kExecutable.string() + "' track '" + (dir / "tiny_v0000_cam0.json").string() +
+                            "' -o '" + (*root_ / "mixed_track").string() + "' > /dev/null 2>'" +
+                            (*root_ / "track_err.txt").string() + "'";
+  const int status = std::system(track.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+  EXPECT_NE(read(*root_ / "track_err.txt").find("does not match its labels"), std::string::npos)
+      << read(*root_ / "track_err.txt");
+  ASSERT_EQ(render_set(dir, "--resume").code, 0);
+  EXPECT_TRUE(contents(dir) == *reference_);
+}
+
+// --resume continues the run it is given the options of, no other.
+TEST_F(Interrupted, ResumeWithOtherOptionsIsRefused) {
+  const fs::path dir = *root_ / "other";
+  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=unit_written:5:KILL").signal, SIGKILL);
+  const auto before = contents(dir);
+  EXPECT_EQ(render_set(dir, "--resume --variation-seed 2").code, 2);
+  EXPECT_TRUE(contents(dir) == before);
+}
+
+}  // namespace

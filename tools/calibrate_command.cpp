@@ -20,6 +20,7 @@
 
 #include "commands.h"
 #include "output_checks.h"
+#include "progress.h"
 #include "tracker_optics.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
@@ -212,12 +213,17 @@ int run_calibrate(const CalibrateRequest& request) {
     // The tracker knows its optics: the spot's width and the sensor's noise.
     const trackers::BlobGlintSettings glint_settings = glint_settings_for(camera, rig.illuminators, nominal_cornea);
     spot_sigma_px = glint_settings.spot_sigma_px;
+    Progress progress("calibrate: frames", static_cast<std::size_t>(
+        request.calibration_grid * request.calibration_grid + positions.size() * request.grid * request.grid +
+        request.noise_frames), request.quiet);
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
       calibration.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
+      progress.step();
     }
     for (std::size_t p = 0; p < positions.size(); ++p) {
       for (const ScreenPoint& t : screen.grid(request.grid, request.grid)) {
         tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, layout, glint_settings, seed++));
+        progress.step();
       }
     }
     // Targets uniform over the screen, from the seed: the noise frames
@@ -227,6 +233,7 @@ int run_calibrate(const CalibrateRequest& request) {
     for (int i = 0; i < request.noise_frames; ++i) {
       const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
       noise_frames.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
+      progress.step();
     }
   } catch (const std::exception& error) {
     std::cerr << "purkinje calibrate: error: " << error.what() << "\n";

@@ -20,6 +20,7 @@ struct ScoreOutput {
   std::string output_dir;
   int overlays = 10;               // the worst this many images, drawn
   double match_radius_px = 5;
+  bool quiet = false;  // no progress on stderr
 };
 
 struct TrackRequest : ScoreOutput {
@@ -49,6 +50,7 @@ struct CalibrateRequest {
   // calibration frames serve (nine measure a deviation to about 12%).
   int noise_frames = 64;
   std::uint64_t seed = 1;       // of the first frame's render; each next frame the next
+  bool quiet = false;           // no progress on stderr
 };
 
 int run_track(const TrackRequest& request);

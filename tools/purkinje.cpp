@@ -27,11 +27,13 @@
 
 #include "commands.h"
 #include "output_checks.h"
+#include "progress.h"
 #include "purkinje/models/eye_variation.h"
 #include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
+#include "purkinje/models/spelling.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/ray_tracer.h"
@@ -146,6 +148,7 @@ struct RenderRequest {
   int variations = 0;  // 0: the scene as it is
   std::uint64_t variation_seed = 1;
   bool resume = false;  // continue a killed --variations run in the same folder
+  bool quiet = false;   // no progress on stderr
   double max_gaze_deg = 30;
   double min_pupil_mm = 1, max_pupil_mm = 4;
 };
@@ -166,7 +169,7 @@ std::string file_stem(const std::string& scene, const std::string& camera) {
 // as one all-or-nothing set; returns an exit code, the error on stderr.
 int render_and_write(const RenderRequest& request, const purkinje::Scene& scene, const std::vector<int>& cameras,
                      const std::string& stem_prefix, purkinje::renderer::RenderOptions options,
-                     const std::string& progress_label) {
+                     const std::string& progress_label, bool show_progress) {
   namespace r = purkinje::renderer;
   // Every camera is rendered before anything is written, so a failure
   // leaves no file at all: all images go out in one all-or-nothing set.
@@ -181,7 +184,7 @@ int render_and_write(const RenderRequest& request, const purkinje::Scene& scene,
     }
     stems.push_back(stem);
   }
-  const bool terminal = isatty(STDERR_FILENO) != 0;
+  const bool terminal = show_progress && isatty(STDERR_FILENO) != 0;
   std::vector<r::RenderResult> results;
   for (int camera : cameras) {
     const std::string name = progress_label + scene.cameras[camera].name();
@@ -346,7 +349,7 @@ int run_render(const RenderRequest& request) {
   options.noise = !request.no_noise;
   options.per_light_glint_masks = request.glint_masks;
   options.threads = request.threads;
-  if (variations.empty()) return render_and_write(request, scene, cameras, scene.name, options, "");
+  if (variations.empty()) return render_and_write(request, scene, cameras, scene.name, options, "", !request.quiet);
 
   // Each variation's files are written as soon as it is rendered (a set
   // of hundreds would not fit in memory), each all or nothing, the labels
@@ -406,16 +409,18 @@ int run_render(const RenderRequest& request) {
   }
   if (request.resume) remove_stale_temporaries(dir);
   std::size_t resumed = 0;
+  purkinje::tools::Progress progress("render", variations.size(), request.quiet);
   for (std::size_t k = 0; k < variations.size(); ++k) {
     options.seed = request.seed + k;  // the noise differs from image to image
     if (request.resume && unit_complete(dir, stem_of(k), scene, cameras, options)) {
       ++resumed;
     } else {
       const int code = render_and_write(request, purkinje::with_eye_variation(scene, variations[k]), cameras,
-                                        stem_of(k), options, "variation " + std::to_string(k) + ", ");
+                                        stem_of(k), options, "", false);
       if (code != kOk) return code;
     }
     purkinje::stop_point("unit_written");
+    progress.step();
     if (!indexed.count(k)) {
       try {
         append_line(index_file, line_of(k));
@@ -445,6 +450,7 @@ void add_score_output_options(CLI::App& command, purkinje::tools::ScoreOutput& r
   command.add_option("--overlays", request.overlays, "Draw this many of the worst images")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
+  command.add_flag("--quiet", request.quiet, "No progress on standard error");
   command.add_option("--match-radius", request.match_radius_px,
                      "A detection within this many pixels of a label is paired with it")
       ->check(kFinite)
@@ -531,6 +537,7 @@ int run(int argc, char** argv) {
                      "centre of rotation and its pupil resized, at random (0: the scene as it is)")
       ->check(CLI::Range(0, 10000000))
       ->capture_default_str();
+  render->add_flag("--quiet", render_request.quiet, "No progress on standard error");
   render->add_flag("--resume", render_request.resume,
                    "Continue a killed --variations run in the same folder with the same options:\n"
                    "complete variations are kept, the rest rendered again (the same bytes as one run)");
@@ -620,13 +627,45 @@ int run(int argc, char** argv) {
                         "Frames at random targets that only measure the detectors' noise (0: the calibration frames)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
+  calibrate->add_flag("--quiet", calibrate_request.quiet, "No progress on standard error");
   calibrate->add_option("--seed", calibrate_request.seed, "Render seed of the first frame")
       ->check(kSeed)
       ->capture_default_str();
 
+  // A mistyped subcommand would only get CLI11's "A subcommand is required".
+  std::vector<std::string> subcommand_names;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    subcommand_names.push_back(sub->get_name());
+  }
+  if (argc > 1 && argv[1][0] != '-' &&
+      std::find(subcommand_names.begin(), subcommand_names.end(), argv[1]) == subcommand_names.end()) {
+    std::cerr << "purkinje: unknown subcommand '" << argv[1] << "'";
+    if (const auto meant = purkinje::closest_match(argv[1], subcommand_names)) {
+      std::cerr << "; did you mean '" << *meant << "'?";
+    }
+    std::cerr << " (subcommands:";
+    for (const std::string& name : subcommand_names) std::cerr << ' ' << name;
+    std::cerr << ")\n";
+    return kUsageError;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
+    // A mistyped option: name the one meant, beside CLI11's own message.
+    for (const CLI::App* sub : app.get_subcommands()) {
+      std::vector<std::string> long_names;
+      for (const CLI::Option* option : sub->get_options()) {
+        for (const std::string& name : option->get_lnames()) long_names.push_back("--" + name);
+      }
+      for (const std::string& extra : sub->remaining()) {
+        if (!extra.starts_with("--")) continue;
+        const std::string typed = extra.substr(0, extra.find('='));
+        if (const auto meant = purkinje::closest_match(typed, long_names)) {
+          std::cerr << "purkinje " << sub->get_name() << ": unknown option " << typed << "; did you mean " << *meant
+                    << "?\n";
+        }
+      }
+    }
     // --help and --version arrive here too, with exit code 0.
     return app.exit(error) == 0 ? kOk : kUsageError;
   }

@@ -16,6 +16,7 @@
 
 #include "commands.h"
 #include "output_checks.h"
+#include "progress.h"
 #include "tracker_optics.h"
 #include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
@@ -69,10 +70,12 @@ std::vector<fs::path> labels_files(const std::vector<std::string>& inputs) {
   return files;
 }
 
-std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs) {
+std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs, bool quiet) {
   std::vector<LabelledImage> images;
   std::map<std::string, fs::path> seen;
-  for (const fs::path& file : labels_files(inputs)) {
+  const std::vector<fs::path> files = labels_files(inputs);
+  Progress progress("reading labels", files.size(), quiet);
+  for (const fs::path& file : files) {
     LabelledImage image{"", read_image_labels(file)};
     image.name = image.labels.image.filename().string();
     const auto [it, fresh] = seen.emplace(image.name, file);
@@ -81,6 +84,7 @@ std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs) {
                                it->second.string() + " does: image names must differ");
     }
     images.push_back(std::move(image));
+    progress.step();
   }
   return images;
 }
@@ -183,7 +187,7 @@ int run_track(const TrackRequest& request) {
   std::vector<LabelledImage> images;
   std::optional<Scene> rig;
   try {
-    images = read_labels(request.inputs);
+    images = read_labels(request.inputs, request.quiet);
     if (!request.scene_file.empty()) rig = load_scene(request.scene_file);
   } catch (const std::exception& error) {
     std::cerr << "purkinje track: error: " << error.what() << "\n";
@@ -203,6 +207,7 @@ int run_track(const TrackRequest& request) {
   std::map<int, CameraTracker> trackers_by_camera;
   double seconds = 0;
   try {
+    Progress progress("track", images.size(), request.quiet);
     for (const LabelledImage& image : images) {
       const trackers::GreyImage pixels = read_image(image);
       const CameraTracker* tracker = nullptr;
@@ -235,6 +240,7 @@ int run_track(const TrackRequest& request) {
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       scorer.add(image.name, image.labels.views, found);
       detections[image.name] = std::move(found);
+      progress.step();
     }
   } catch (const std::exception& error) {
     std::cerr << "purkinje track: error: " << error.what() << "\n";
@@ -256,7 +262,7 @@ int run_score(const ScoreRequest& request) {
   std::map<std::string, trackers::Detections> detections;
   trackers::Scorer scorer({request.match_radius_px});
   try {
-    images = read_labels(request.inputs);
+    images = read_labels(request.inputs, request.quiet);
     detections = trackers::read_detections_csv(request.detections_file);
     std::set<std::string> names;
     for (const LabelledImage& image : images) names.insert(image.name);

@@ -5,6 +5,7 @@
 #include "purkinje/models/scene_file.h"
 
 #include "purkinje/models/input_file.h"
+#include "purkinje/models/spelling.h"
 
 #include <algorithm>
 #include <charconv>
@@ -77,26 +78,6 @@ std::string join(const std::vector<std::string>& items) {
   std::string out;
   for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
   return out;
-}
-
-// Whether `typed` could be a misspelling of `wanted`: a prefix of it
-// ("radius" for "radius_mm") or at most two edits away (Levenshtein).
-bool looks_like(const std::string& typed, const std::string& wanted) {
-  if (typed.empty()) return false;
-  if (wanted.starts_with(typed) || typed.starts_with(wanted)) return true;
-  std::vector<std::size_t> row(wanted.size() + 1);
-  for (std::size_t j = 0; j <= wanted.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= typed.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= wanted.size(); ++j) {
-      const std::size_t above = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1,
-                         diagonal + (typed[i - 1] == wanted[j - 1] ? 0 : 1)});
-      diagonal = above;
-    }
-  }
-  return row[wanted.size()] <= 2;
 }
 
 // Where a value lives in the file: the source's name and the key path.

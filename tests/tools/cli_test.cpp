@@ -506,3 +506,40 @@ TEST_F(Cli, CalibrateRefusesASceneWithoutAScreenAndBadHeadMoves) {
   EXPECT_NE(err().find("asphericity -1"), std::string::npos) << err();
   EXPECT_TRUE(output_dir_entries().empty());
 }
+
+namespace {
+
+class CliProgress : public Cli {};
+
+// Long commands tell k/N, the rate and the time left on stderr; in a log
+// (stderr not a terminal, as here) one line per step; --quiet silences it.
+TEST_F(CliProgress, LongCommandsShowProgressOnStderrUnlessQuiet) {
+  const std::string scene = quoted((kSourceDir / "tests/data/tiny_remote.json").string());
+  const std::string set = quoted((output_dir_ / "set").string());
+  ASSERT_EQ(run("render " + scene + " -o " + set + " --variations 3"), 0) << err();
+  for (const char* line : {"render: 1/3, ", "render: 2/3, ", "render: 3/3, "}) {
+    EXPECT_NE(err().find(line), std::string::npos) << err();
+  }
+  EXPECT_NE(err().find(" per s, ETA "), std::string::npos) << err();
+  ASSERT_EQ(run("track " + set + " -o " + quoted((output_dir_ / "track").string())), 0) << err();
+  EXPECT_NE(err().find("track: 3/3, "), std::string::npos) << err();
+  ASSERT_EQ(run("render " + scene + " -o " + set + " --variations 3 --quiet"), 0) << err();
+  EXPECT_EQ(err(), "");
+  ASSERT_EQ(run("track " + set + " -o " + quoted((output_dir_ / "track").string()) + " --quiet"), 0) << err();
+  EXPECT_EQ(err(), "");
+}
+
+TEST_F(Cli, AMistypedSubcommandOrOptionGetsDidYouMean) {
+  EXPECT_EQ(run("rendr scene.json"), 2);
+  EXPECT_NE(err().find("unknown subcommand 'rendr'; did you mean 'render'?"), std::string::npos) << err();
+  EXPECT_EQ(run("frobnicate"), 2);
+  EXPECT_NE(err().find("unknown subcommand 'frobnicate' (subcommands: truth render track score calibrate)"),
+            std::string::npos)
+      << err();
+  EXPECT_EQ(run("render --seeed 1 scene.json -o out"), 2);
+  EXPECT_NE(err().find("unknown option --seeed; did you mean --seed?"), std::string::npos) << err();
+  EXPECT_EQ(run("track set -o out --match-radiu 3"), 2);
+  EXPECT_NE(err().find("did you mean --match-radius?"), std::string::npos) << err();
+}
+
+}  // namespace

@@ -20,6 +20,7 @@ struct ScoreOutput {
   std::string output_dir;
   int overlays = 10;               // the worst this many images, drawn
   double match_radius_px = 5;
+  double min_pupil_overlap = 0.5;  // a pupil's ellipse, when given, must overlap the label's this much
   bool quiet = false;  // no progress on stderr
 };
 
@@ -29,6 +30,7 @@ struct TrackRequest : ScoreOutput {
 
 struct ScoreRequest : ScoreOutput {
   std::string detections_file;
+  double min_confidence = 0;  // pupils reported less confident are left out
 };
 
 struct CalibrateRequest {

@@ -451,6 +451,12 @@ void add_score_output_options(CLI::App& command, purkinje::tools::ScoreOutput& r
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   command.add_flag("--quiet", request.quiet, "No progress on standard error");
+  command.add_option("--min-pupil-overlap", request.min_pupil_overlap,
+                     "A pupil given with its ellipse is found only if that ellipse overlaps the label's\n"
+                     "by this much (intersection over union; 0: centres only)")
+      ->check(kFinite)
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   command.add_option("--match-radius", request.match_radius_px,
                      "A detection within this many pixels of a label is paired with it")
       ->check(kFinite)
@@ -575,10 +581,20 @@ int run(int argc, char** argv) {
       "score", "Score another tracker's detections (CSV) against the labels of the images");
   score->footer(std::string("The detections file's columns: image, feature (glint or pupil), u_px, v_px,\n"
                             "and optionally illuminator, semi_axis_1_px, semi_axis_2_px, angle_deg,\n"
-                            "confidence (docs/trackers.md). Writes DIR/score.txt, score.csv, score.json\n"
+                            "confidence (docs/trackers.md); other columns are ignored. Pixel centres sit at\n"
+                            "integer coordinates: (0, 0) is the centre of the top-left pixel, as in OpenCV\n"
+                            "and in the labels; a tracker whose (0, 0) is the pixel's corner subtracts 0.5.\n"
+                            "image: the image's file name, a path ending in it, or its name without the\n"
+                            "extension. A frame where nothing was found: u_px and v_px both empty, both nan\n"
+                            "or both -1; confidence -1: none. Writes DIR/score.txt, score.csv, score.json\n"
                             "and overlays/.\n\n") +
                 kExitCodes);
   score->add_option("--detections", score_request.detections_file, "Detections file (CSV)")->required();
+  score->add_option("--min-confidence", score_request.min_confidence,
+                    "Leave out pupils the tracker reports with a confidence below this")
+      ->check(kFinite)
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   add_score_output_options(*score, score_request);
 
   purkinje::tools::CalibrateRequest calibrate_request;

@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -195,7 +196,10 @@ int run_track(const TrackRequest& request) {
   }
   const trackers::BlobGlintDetector default_glint_detector;
   const trackers::StarburstPupilDetector pupil_detector;
-  trackers::Scorer scorer({request.match_radius_px});
+  trackers::ScoringSettings settings;
+  settings.match_radius_px = request.match_radius_px;
+  settings.min_pupil_overlap = request.min_pupil_overlap;
+  trackers::Scorer scorer(settings);
   std::map<std::string, trackers::Detections> detections;
   // Per camera of the rig: which light makes which glint (where its lights
   // would put them on the rig's nominal eye), and a glint detector told
@@ -253,29 +257,84 @@ int run_track(const TrackRequest& request) {
   return write_outputs("track", request, scorer.score(), detections, images, true);
 }
 
+// The labelled image a detections file's name means: the image's file
+// name itself, a path ending in it (trackers write where they read), or
+// its name without the extension; empty when none or several match.
+std::string resolve_image(const std::string& name, const std::map<std::string, std::string>& by_name,
+                          const std::multimap<std::string, std::string>& by_stem) {
+  if (by_name.count(name)) return name;
+  const fs::path path(name);
+  if (by_name.count(path.filename().string())) return path.filename().string();
+  const auto [first, last] = by_stem.equal_range(path.filename().string());
+  if (first != last && std::next(first) == last) return first->second;
+  return {};
+}
+
 int run_score(const ScoreRequest& request) {
   if (const auto refusal = check_outputs(request, {}, {request.detections_file})) {
     std::cerr << "purkinje score: error: " << refusal->message << "\n";
     return refusal->exit_code;
   }
   std::vector<LabelledImage> images;
-  std::map<std::string, trackers::Detections> detections;
-  trackers::Scorer scorer({request.match_radius_px});
+  trackers::DetectionsFile file;
   try {
     images = read_labels(request.inputs, request.quiet);
-    detections = trackers::read_detections_csv(request.detections_file);
-    std::set<std::string> names;
-    for (const LabelledImage& image : images) names.insert(image.name);
-    for (const auto& [name, found] : detections) {
-      if (!names.count(name)) {
-        throw std::runtime_error(request.detections_file + ": image " + name +
-                                 " is not among the labelled images given");
-      }
-    }
+    file = trackers::read_detections_file(request.detections_file);
   } catch (const std::exception& error) {
     std::cerr << "purkinje score: error: " << error.what() << "\n";
     return kBadInput;
   }
+  std::map<std::string, std::string> by_name;
+  std::multimap<std::string, std::string> by_stem;
+  for (const LabelledImage& image : images) {
+    by_name[image.name] = image.name;
+    by_stem.emplace(fs::path(image.name).stem().string(), image.name);
+  }
+  // Rows of images outside the inputs are left out, not fatal: a tracker
+  // run over a whole folder is scored on the part that is labelled.
+  std::map<std::string, trackers::Detections> detections;
+  int skipped_images = 0, below_confidence = 0;
+  std::string first_skipped;
+  for (auto& [name, found] : file.images) {
+    const std::string image = resolve_image(name, by_name, by_stem);
+    if (image.empty()) {
+      if (skipped_images++ == 0) first_skipped = name + " (line " + std::to_string(file.line_of.at(name)) + ")";
+      continue;
+    }
+    trackers::Detections& d = detections[image];
+    d.glints.insert(d.glints.end(), found.glints.begin(), found.glints.end());
+    for (const trackers::PupilFound& p : found.pupils) {
+      if (p.confidence && *p.confidence < request.min_confidence) {
+        ++below_confidence;
+        continue;
+      }
+      d.pupils.push_back(p);
+    }
+  }
+  std::ostringstream notes;
+  if (!file.ignored_columns.empty()) {
+    notes << "columns not read:";
+    for (const std::string& c : file.ignored_columns) notes << " " << c;
+    notes << "\n";
+  }
+  if (file.failure_rows > 0) notes << file.failure_rows << " rows say nothing was found (failed frames)\n";
+  if (below_confidence > 0) {
+    notes << below_confidence << " pupils below --min-confidence " << request.min_confidence << " left out\n";
+  }
+  if (skipped_images > 0) {
+    notes << skipped_images << " images of the detections file are not among the labelled ones and were left out, "
+          << "the first " << first_skipped << "\n";
+  }
+  if (!file.has_glints) notes << "no glint rows: glints not scored\n";
+  if (!file.has_pupils) notes << "no pupil rows: pupils not scored\n";
+  std::cerr << notes.str();
+
+  trackers::ScoringSettings settings;
+  settings.match_radius_px = request.match_radius_px;
+  settings.min_pupil_overlap = request.min_pupil_overlap;
+  settings.glints = file.has_glints;
+  settings.pupils = file.has_pupils;
+  trackers::Scorer scorer(settings);
   const trackers::Detections none;
   for (const LabelledImage& image : images) {
     const auto found = detections.find(image.name);

@@ -416,13 +416,18 @@ TEST_F(Cli, ScoreNamesTheLineOfAMalformedDetectionAndWritesNothing) {
   EXPECT_NE(err().find("theirs.csv:3: column v_px = \"2x4.9\""), std::string::npos) << err();
   EXPECT_FALSE(fs::exists(scored));
 
+  // Rows of an image outside the inputs are left out with a note naming the first.
   std::ofstream(detections) << "image,feature,u_px,v_px\nsomewhere_else.png,glint,316.6,239.5\n";
   EXPECT_EQ(run("score --detections " + quoted(detections.string()) + " " + quoted(set.string()) + " -o " +
                 quoted(scored.string())),
-            1);
-  EXPECT_NE(err().find("somewhere_else.png is not among the labelled images"), std::string::npos) << err();
+            0);
+  EXPECT_NE(err().find("1 images of the detections file are not among the labelled ones and were left out, the "
+                       "first somewhere_else.png (line 2)"),
+            std::string::npos)
+      << err();
 
-  // Their detections of one glint only: the other glint and the pupil missed.
+  // Their detections of one glint only: the other glint missed; a file
+  // without pupil rows does not score pupils (they are not "missed").
   std::ofstream(detections) << "image,feature,u_px,v_px\nremote_cam0.png,glint,316.6,239.5\n";
   ASSERT_EQ(run("score --detections " + quoted(detections.string()) + " " + quoted(set.string()) + " -o " +
                 quoted(scored.string())),
@@ -431,8 +436,11 @@ TEST_F(Cli, ScoreNamesTheLineOfAMalformedDetectionAndWritesNothing) {
   const json score = json::parse(read(scored / "score.json"));
   EXPECT_EQ(score["glints"]["labelled"], 2);
   EXPECT_EQ(score["glints"]["found"], 1);
-  EXPECT_EQ(score["pupils"]["labelled"], 1);
-  EXPECT_EQ(score["pupils"]["found"], 0);
+  EXPECT_EQ(score["pupils"]["reported"], false);
+  EXPECT_EQ(score["pupils"]["labelled"], 0);
+  EXPECT_NE(err().find("no pupil rows: pupils not scored"), std::string::npos) << err();
+  EXPECT_NE(read(scored / "score.txt").find("pupils      not in the detections file: not scored"), std::string::npos)
+      << read(scored / "score.txt");
   EXPECT_TRUE(score["glints"]["identity_rate"].is_null());  // no light told
 
   EXPECT_EQ(run("track " + quoted(root_.string() + "/nowhere") + " -o " + quoted(scored.string())), 1);
@@ -540,6 +548,47 @@ TEST_F(Cli, AMistypedSubcommandOrOptionGetsDidYouMean) {
   EXPECT_NE(err().find("unknown option --seeed; did you mean --seed?"), std::string::npos) << err();
   EXPECT_EQ(run("track set -o out --match-radiu 3"), 2);
   EXPECT_NE(err().find("did you mean --match-radius?"), std::string::npos) << err();
+}
+
+}  // namespace
+
+namespace {
+
+// Detections written the way published pupil trackers' tools write them:
+// a byte-order mark, spaces after commas, a column of their own, images
+// named by the path they were read from or without the extension, (-1, -1)
+// for a failed frame, confidence -1 for none, and an image outside the set.
+TEST_F(Cli, ScoresDetectionsWrittenTheWayOtherToolkitsWriteThem) {
+  const std::string scene = quoted((kSourceDir / "tests/data/tiny_remote.json").string());
+  const fs::path set = output_dir_ / "set";
+  ASSERT_EQ(run("render " + scene + " -o " + quoted(set.string()) + " --variations 4 --quiet"), 0) << err();
+  const json labels = json::parse(read(set / "tiny_v0000_cam0.json"));
+  const json& ellipse = labels["views"][0]["pupil"]["ellipse"];
+  const double u = ellipse["center_u_px"], v = ellipse["center_v_px"];
+  const fs::path detections = root_ / "theirs.csv";
+  std::ofstream(detections) << "\xEF\xBB\xBF" << "frame, image, feature, u_px, v_px, confidence\n"
+                            << "0, /data/run7/tiny_v0000_cam0.png, pupil, " << u << ", " << v << ", -1\n"
+                            << "1, tiny_v0001_cam0, pupil, -1, -1, 0\n"
+                            << "2, tiny_v0002_cam0.png, pupil, " << u << ", " << v << ", 0.2\n"
+                            << "3, not_in_the_set.png, pupil, 5, 5, 0.9\n";
+  const fs::path scored = output_dir_ / "scored";
+  ASSERT_EQ(run("score --detections " + quoted(detections.string()) + " " + quoted(set.string()) + " -o " +
+                quoted(scored.string()) + " --min-confidence 0.5 --quiet"),
+            0)
+      << err();
+  for (const char* note : {"columns not read: frame", "1 rows say nothing was found", "1 pupils below --min-confidence",
+                           "the first not_in_the_set.png (line 5)", "no glint rows: glints not scored"}) {
+    EXPECT_NE(err().find(note), std::string::npos) << note << "\n" << err();
+  }
+  const json score = json::parse(read(scored / "score.json"));
+  EXPECT_EQ(score["pupils"]["labelled"], 4);
+  EXPECT_EQ(score["pupils"]["found"], 1);  // v0000 by its path; v0002 below the confidence asked
+  EXPECT_EQ(score["pupils"]["false_positives"], 0);
+  EXPECT_EQ(score["pupils"]["nearest_px"]["none"], 3);
+  EXPECT_EQ(score["glints"]["reported"], false);
+
+  ASSERT_EQ(run("score --help"), 0);
+  EXPECT_NE(out().find("(0, 0) is the centre of the top-left pixel"), std::string::npos) << out();
 }
 
 }  // namespace

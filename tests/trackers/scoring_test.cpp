@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -138,10 +139,12 @@ TEST(Scorer, WritesRowsAndSummariesWithoutNaN) {
   const Score s = hand_made_score();
   const std::string csv = score_csv(s);
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
-            "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity");
-  EXPECT_NE(csv.find("\na.png,glint,0,1,found,120,100,121,100,1,wrong\n"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("\na.png,glint,,,false_positive,,,200,200,,\n"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("\nb.png,glint,0,0,missed,50,50,,,,\n"), std::string::npos) << csv;
+            "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity,nearest_px,"
+            "overlap,axes_error_px,angle_error_deg");
+  // A found glint's nearest detection is itself; b.png has no glint detection at all.
+  EXPECT_NE(csv.find("\na.png,glint,0,1,found,120,100,121,100,1,wrong,1,,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na.png,glint,,,false_positive,,,200,200,,,,,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nb.png,glint,0,0,missed,50,50,,,,,,,,\n"), std::string::npos) << csv;
   EXPECT_EQ(csv.find("nan"), std::string::npos);
 
   const nlohmann::json j = nlohmann::json::parse(score_json(s));
@@ -187,6 +190,115 @@ TEST(Scorer, RejectsABadRadius) {
   EXPECT_THROW(Scorer({0}), std::invalid_argument);
   EXPECT_THROW(Scorer({std::nan("")}), std::invalid_argument);
   EXPECT_THROW(hand_made_score().glints.rate_within(3), std::invalid_argument);
+}
+
+// Intersection over union of two ellipses by brute force, independent of
+// the scorer's own count: a 1000 x 1000 grid over a box holding both.
+double overlap_by_grid(const Ellipse& a, const Ellipse& b) {
+  const auto in = [](const Ellipse& e, double u, double v) {
+    const double du = u - e.center.u, dv = v - e.center.v;
+    const double x = du * std::cos(e.angle_rad) + dv * std::sin(e.angle_rad);
+    const double y = -du * std::sin(e.angle_rad) + dv * std::cos(e.angle_rad);
+    return (x / e.semi_axis_1_px) * (x / e.semi_axis_1_px) + (y / e.semi_axis_2_px) * (y / e.semi_axis_2_px) <= 1;
+  };
+  int both = 0, either = 0;
+  for (int j = 0; j < 1000; ++j) {
+    for (int i = 0; i < 1000; ++i) {
+      const double u = 70 + 60.0 * (i + 0.5) / 1000, v = 70 + 60.0 * (j + 0.5) / 1000;
+      both += in(a, u, v) && in(b, u, v);
+      either += in(a, u, v) || in(b, u, v);
+    }
+  }
+  return static_cast<double>(both) / either;
+}
+
+// A circle's label: a pupil of radius r about c, every border point seen.
+EyeInCameraTruth round_pupil(Pixel c, double r) {
+  EyeInCameraTruth view;
+  view.pupil = pupil(c, 4);
+  view.pupil.ellipse = {c, r, r, 0};
+  return view;
+}
+
+// Detectors built for real cameras may fit an ellipse to the iris, which
+// is concentric with the pupil: the centre is right, the pupil is not.
+// Intersection over union of concentric circles is the ratio of their
+// areas: (10 / 30)^2 = 0.111 for a 10 px pupil and a 30 px iris.
+TEST(Scorer, AnIrisEllipseConcentricWithThePupilIsNotAPupil) {
+  Scorer scorer;
+  Detections iris, own;
+  iris.pupils = {{{100, 100}, Ellipse{{100, 100}, 30, 30, 0}, std::nullopt}};
+  own.pupils = {{{100.2, 100}, Ellipse{{100.2, 100}, 10.5, 9.5, 0.3}, std::nullopt}};
+  scorer.add("iris.png", {round_pupil({100, 100}, 10)}, iris);
+  scorer.add("pupil.png", {round_pupil({100, 100}, 10)}, own);
+  const Score s = scorer.score();
+  EXPECT_EQ(s.pupils.labelled, 2);
+  EXPECT_EQ(s.pupils.found, 1);
+  EXPECT_EQ(s.pupils.wrong_shape, 1);
+  EXPECT_DOUBLE_EQ(s.pupils.false_positive_rate(), 0.5);
+  for (const FeatureScore& f : s.features) {
+    if (f.image == "iris.png" && f.detection) {
+      EXPECT_EQ(f.outcome, Outcome::wrong_shape);
+      EXPECT_NEAR(*f.overlap, 1.0 / 9, 0.01);
+      EXPECT_NEAR(*f.axes_error_px, 20, 1e-12);
+      EXPECT_FALSE(f.angle_error_deg) << "a circle's angle means nothing";
+    }
+    if (f.image == "pupil.png") {
+      EXPECT_EQ(f.outcome, Outcome::found);
+      // The scorer's 128 x 128 count, within 1% of a finer count's.
+      const double expected = overlap_by_grid({{100, 100}, 10, 10, 0}, {{100.2, 100}, 10.5, 9.5, 0.3});
+      EXPECT_GT(expected, 0.85);
+      EXPECT_NEAR(*f.overlap, expected, 0.01);
+      EXPECT_NEAR(*f.axes_error_px, 0.5, 1e-12);
+    }
+  }
+  // With the check off, centres alone decide.
+  ScoringSettings centres_only;
+  centres_only.min_pupil_overlap = 0;
+  Scorer lenient(centres_only);
+  lenient.add("iris.png", {round_pupil({100, 100}, 10)}, iris);
+  EXPECT_EQ(lenient.score().pupils.found, 1);
+}
+
+// The error over the found is over those within the radius only; a
+// tracker that finds 2 pupils of 10 looks precise there. The figures over
+// all labels count the 8 without a detection.
+TEST(Scorer, FiguresOverAllLabelsCountTheMisses) {
+  Scorer scorer;
+  for (int i = 0; i < 10; ++i) {
+    Detections d;
+    if (i < 2) d.pupils = {{{100.1, 100}, std::nullopt, std::nullopt}};
+    if (i == 2) d.pupils = {{{140, 100}, std::nullopt, std::nullopt}};  // 40 px off: a false positive and a miss
+    scorer.add("i" + std::to_string(i) + ".png", {round_pupil({100, 100}, 10)}, d);
+  }
+  const Score s = scorer.score();
+  EXPECT_NEAR(s.pupils.error_px.median, 0.1, 1e-9);
+  EXPECT_EQ(s.pupils.nearest_px.count, 10);
+  EXPECT_EQ(s.pupils.nearest_px.none, 7);
+  EXPECT_TRUE(std::isinf(s.pupils.nearest_px.median));
+  EXPECT_TRUE(std::isinf(s.pupils.nearest_px.max));
+  const nlohmann::json j = nlohmann::json::parse(score_json(s));
+  EXPECT_TRUE(j["pupils"]["nearest_px"]["median"].is_null());
+  EXPECT_EQ(j["pupils"]["nearest_px"]["none"], 7);
+  EXPECT_NE(score_table(s).find("over all labels"), std::string::npos);
+}
+
+// A pupil-only tracker's glints are not "0 of N found": they are not scored.
+TEST(Scorer, AFeatureTheTrackerDoesNotReportIsNotScored) {
+  ScoringSettings settings;
+  settings.glints = false;
+  Scorer scorer(settings);
+  EyeInCameraTruth view = round_pupil({100, 100}, 10);
+  view.glints = {glint(0, PathStatus::ok, {90, 90})};
+  Detections d;
+  d.pupils = {{{100, 100}, std::nullopt, std::nullopt}};
+  scorer.add("a.png", {view}, d);
+  const Score s = scorer.score();
+  EXPECT_EQ(s.glints.labelled, 0);
+  EXPECT_EQ(s.pupils.found, 1);
+  EXPECT_NE(score_table(s).find("glints      not in the detections file: not scored"), std::string::npos)
+      << score_table(s);
+  EXPECT_EQ(nlohmann::json::parse(score_json(s))["glints"]["reported"], false);
 }
 
 }  // namespace

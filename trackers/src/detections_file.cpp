@@ -39,7 +39,22 @@ bool split_cells(const std::string& line, std::vector<std::string>& cells) {
       cells.back() += c;
     }
   }
+  // Spaces and tabs around a cell are not part of it ("a.png, glint, 3"),
+  // as readers of CSV written by hand or by printf expect.
+  for (std::string& cell : cells) {
+    const auto first = cell.find_first_not_of(" \t");
+    if (first == std::string::npos) {
+      cell.clear();
+      continue;
+    }
+    cell = cell.substr(first, cell.find_last_not_of(" \t") - first + 1);
+  }
   return !quoted;
+}
+
+// A cell that says "no value" as trackers write it: empty, or nan.
+bool says_nothing(const std::string& text) {
+  return text.empty() || text == "nan" || text == "NaN" || text == "NAN" || text == "-nan";
 }
 
 enum Column { image, feature, u_px, v_px, illuminator, semi_axis_1_px, semi_axis_2_px, angle_deg, confidence, kColumns };
@@ -81,15 +96,26 @@ class Row {
 }  // namespace
 
 std::map<std::string, Detections> read_detections_csv(const std::filesystem::path& file) {
-  return parse_detections_csv(read_input_file(file, kMaxDetectionsFileBytes, "a detections file"), file);
+  return read_detections_file(file).images;
 }
 
 std::map<std::string, Detections> parse_detections_csv(const std::string& text, const std::filesystem::path& file) {
+  return parse_detections_file(text, file).images;
+}
+
+DetectionsFile read_detections_file(const std::filesystem::path& file) {
+  return parse_detections_file(read_input_file(file, kMaxDetectionsFileBytes, "a detections file"), file);
+}
+
+DetectionsFile parse_detections_file(std::string text, const std::filesystem::path& file) {
+  // A UTF-8 byte-order mark, as spreadsheet programs write it, is no part
+  // of the first column's name.
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
   std::istringstream in(text);
   const auto fail = [&](int line, const std::string& what) {
     throw std::runtime_error(file.string() + ":" + std::to_string(line) + ": " + what);
   };
-  std::map<std::string, Detections> out;
+  DetectionsFile out;
   std::vector<std::string> cells;
   int where[kColumns];
   std::fill(where, where + kColumns, -1);
@@ -103,15 +129,20 @@ std::map<std::string, Detections> parse_detections_csv(const std::string& text, 
       for (std::size_t i = 0; i < cells.size(); ++i) {
         const auto name = std::find_if(std::begin(kNames), std::end(kNames), [&](const char* n) { return cells[i] == n; });
         if (name == std::end(kNames)) {
-          fail(number, "header: unknown column \"" + cells[i] + "\" (columns: image, feature, u_px, v_px, "
-                       "illuminator, semi_axis_1_px, semi_axis_2_px, angle_deg, confidence)");
+          // Trackers write more than we read (timestamps, their own ids).
+          out.ignored_columns.push_back(cells[i]);
+          continue;
         }
         int& slot = where[name - std::begin(kNames)];
         if (slot >= 0) fail(number, "header: column \"" + cells[i] + "\" twice");
         slot = static_cast<int>(i);
       }
       for (const Column c : {image, feature, u_px, v_px}) {
-        if (where[c] < 0) fail(number, std::string("header: the column ") + kNames[c] + " is missing");
+        if (where[c] < 0) {
+          fail(number, std::string("header: the column ") + kNames[c] +
+                           " is missing (required: image, feature, u_px, v_px; optional: illuminator, "
+                           "semi_axis_1_px, semi_axis_2_px, angle_deg, confidence)");
+        }
       }
       header_cells = cells.size();
       continue;
@@ -121,15 +152,31 @@ std::map<std::string, Detections> parse_detections_csv(const std::string& text, 
     }
     const Row row(file, number, cells, where);
     if (row.empty(image)) row.fail(image, "must name an image");
+    const std::string name = row.text(image);
+    out.line_of.emplace(name, number);
+    Detections& d = out.images[name];
+    const bool glint_row = row.text(feature) == "glint";
+    if (!glint_row && row.text(feature) != "pupil") row.fail(feature, "must be glint or pupil");
+    (glint_row ? out.has_glints : out.has_pupils) = true;
+    // A failed frame, as trackers write it: no centre (empty or nan), or
+    // (-1, -1). The image was read and nothing of this feature was found.
+    const std::string u = row.text(u_px), v = row.text(v_px);
+    if ((says_nothing(u) && says_nothing(v)) || (u == "-1" && v == "-1")) {
+      ++out.failure_rows;
+      continue;
+    }
+    if (says_nothing(u) != says_nothing(v)) row.fail(says_nothing(u) ? u_px : v_px, "must be a finite number like the other coordinate (both empty, both nan or both -1: nothing found)");
     const Pixel centre{row.number(u_px), row.number(v_px)};
     const std::optional<double> light = row.optional_number(illuminator);
     const std::optional<double> a = row.optional_number(semi_axis_1_px), b = row.optional_number(semi_axis_2_px),
-                                angle = row.optional_number(angle_deg), conf = row.optional_number(confidence);
-    Detections& d = out[row.text(image)];
-    if (row.text(feature) == "glint") {
-      for (const Column c : {semi_axis_1_px, semi_axis_2_px, angle_deg, confidence}) {
+                                angle = row.optional_number(angle_deg);
+    // Confidence -1 is "none" in several toolkits.
+    const std::optional<double> conf = row.text(confidence) == "-1" ? std::nullopt : row.optional_number(confidence);
+    if (glint_row) {
+      for (const Column c : {semi_axis_1_px, semi_axis_2_px, angle_deg}) {
         if (!row.empty(c)) row.fail(c, "is a pupil's column: leave it empty for a glint");
       }
+      if (!row.empty(confidence) && row.text(confidence) != "-1") row.fail(confidence, "is a pupil's column: leave it empty for a glint");
       Glint g;
       g.centre = centre;
       if (light) {
@@ -139,7 +186,7 @@ std::map<std::string, Detections> parse_detections_csv(const std::string& text, 
         g.illuminator = static_cast<int>(*light);
       }
       d.glints.push_back(g);
-    } else if (row.text(feature) == "pupil") {
+    } else {
       if (light) row.fail(illuminator, "is a glint's column: leave it empty for a pupil");
       PupilFound p;
       p.centre = centre;
@@ -147,15 +194,14 @@ std::map<std::string, Detections> parse_detections_csv(const std::string& text, 
         if (!a || !(*a > 0)) row.fail(semi_axis_1_px, "must be a positive number (with the other two ellipse columns)");
         if (!b || !(*b > 0)) row.fail(semi_axis_2_px, "must be a positive number (with the other two ellipse columns)");
         if (!angle) row.fail(angle_deg, "must be a number (with the other two ellipse columns)");
+        if (!(std::abs(*angle) <= 360)) row.fail(angle_deg, "must be in [-360, 360] degrees");
         p.ellipse = Ellipse{centre, *a, *b, *angle * std::numbers::pi / 180};
       }
       if (conf) {
-        if (!(*conf >= 0 && *conf <= 1)) row.fail(confidence, "must be in [0, 1]");
+        if (!(*conf >= 0 && *conf <= 1)) row.fail(confidence, "must be in [0, 1], or -1 for none");
         p.confidence = *conf;
       }
       d.pupils.push_back(p);
-    } else {
-      row.fail(feature, "must be glint or pupil");
     }
   }
   if (header_cells == 0) throw std::runtime_error(file.string() + ": empty: a header row is needed");

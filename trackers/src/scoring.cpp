@@ -4,6 +4,8 @@
 #include <cmath>
 #include <iomanip>
 #include <map>
+#include <numbers>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -21,6 +23,7 @@ const char* to_string(Outcome o) {
     case Outcome::missed: return "missed";
     case Outcome::false_positive: return "false_positive";
     case Outcome::not_counted: return "not_counted";
+    case Outcome::wrong_shape: return "wrong_shape";
   }
   return "unknown";
 }
@@ -39,7 +42,55 @@ struct Label {
   Pixel pixel;
   int eye = -1, illuminator = -1;
   bool counted = true;  // false: there, but left out of the score
+  std::optional<Ellipse> outline;  // a pupil's
 };
+
+bool inside(const Ellipse& e, double u, double v) {
+  const double du = u - e.center.u, dv = v - e.center.v;
+  const double c = std::cos(e.angle_rad), s = std::sin(e.angle_rad);
+  const double x = (du * c + dv * s) / e.semi_axis_1_px, y = (-du * s + dv * c) / e.semi_axis_2_px;
+  return x * x + y * y <= 1;
+}
+
+// Intersection over union of two ellipses, counted on a 128 x 128 grid
+// over the box that holds both (within about 1% of the exact figure).
+double overlap(const Ellipse& a, const Ellipse& b) {
+  const double ra = std::max(a.semi_axis_1_px, a.semi_axis_2_px), rb = std::max(b.semi_axis_1_px, b.semi_axis_2_px);
+  const double u0 = std::min(a.center.u - ra, b.center.u - rb), u1 = std::max(a.center.u + ra, b.center.u + rb);
+  const double v0 = std::min(a.center.v - ra, b.center.v - rb), v1 = std::max(a.center.v + ra, b.center.v + rb);
+  constexpr int kCells = 128;
+  int both = 0, either = 0;
+  for (int j = 0; j < kCells; ++j) {
+    const double v = v0 + (j + 0.5) * (v1 - v0) / kCells;
+    for (int i = 0; i < kCells; ++i) {
+      const double u = u0 + (i + 0.5) * (u1 - u0) / kCells;
+      const bool in_a = inside(a, u, v), in_b = inside(b, u, v);
+      both += in_a && in_b;
+      either += in_a || in_b;
+    }
+  }
+  return either > 0 ? static_cast<double>(both) / either : 0.0;
+}
+
+// The found ellipse against the label's: overlap, the larger semi-axis
+// error (axes matched by size) and the angle's error where it means
+// something (the label more than 5% from a circle).
+void compare_outlines(FeatureScore& f, const Ellipse& label, const Ellipse& found) {
+  f.overlap = overlap(label, found);
+  const double l1 = std::max(label.semi_axis_1_px, label.semi_axis_2_px);
+  const double l2 = std::min(label.semi_axis_1_px, label.semi_axis_2_px);
+  const double f1 = std::max(found.semi_axis_1_px, found.semi_axis_2_px);
+  const double f2 = std::min(found.semi_axis_1_px, found.semi_axis_2_px);
+  f.axes_error_px = std::max(std::abs(l1 - f1), std::abs(l2 - f2));
+  if (l2 < 0.95 * l1) {
+    // The angle of each major axis, modulo 180 deg.
+    const auto major = [](const Ellipse& e) {
+      return e.semi_axis_1_px >= e.semi_axis_2_px ? e.angle_rad : e.angle_rad + std::numbers::pi / 2;
+    };
+    double d = std::fmod(std::abs(major(label) - major(found)) * 180 / std::numbers::pi, 180.0);
+    f.angle_error_deg = std::min(d, 180 - d);
+  }
+}
 
 // Pairs detections with labels nearest first within the radius; writes
 // each label's and detection's score, and returns for each detection the
@@ -82,15 +133,21 @@ void tally(FeatureSummary& s, const FeatureScore& f) {
     case Outcome::missed: ++s.labelled; break;
     case Outcome::false_positive: ++s.detected, ++s.false_positives; break;
     case Outcome::not_counted: ++s.detected, ++s.not_counted; break;
+    case Outcome::wrong_shape: ++s.detected, ++s.wrong_shape; break;
   }
 }
 
 // Scores one feature of one image: labels (counted or not) against detections.
 void score_feature(Score& score, FeatureSummary& summary, const std::string& image, Feature feature,
                    const std::vector<Label>& labels, const std::vector<Pixel>& detections,
-                   const std::vector<int>& told_illuminator) {
+                   const std::vector<int>& told_illuminator, const std::vector<std::optional<Ellipse>>& outlines) {
   const std::vector<int> paired = pair_nearest(labels, detections, score.settings.match_radius_px);
   std::vector<bool> label_found(labels.size(), false);
+  const auto nearest = [&](const Label& l) -> std::optional<double> {
+    std::optional<double> best;
+    for (const Pixel& d : detections) best = std::min(best.value_or(INFINITY), distance(l.pixel, d));
+    return best;
+  };
   for (std::size_t d = 0; d < detections.size(); ++d) {
     FeatureScore f;
     f.image = image;
@@ -98,11 +155,21 @@ void score_feature(Score& score, FeatureSummary& summary, const std::string& ima
     f.detection = detections[d];
     if (paired[d] >= 0) {
       const Label& l = labels[paired[d]];
-      label_found[paired[d]] = true;
       f.eye = l.eye, f.illuminator = l.illuminator, f.label = l.pixel;
       f.outcome = Outcome::found;
       f.error_px = distance(l.pixel, detections[d]);
       if (feature == Feature::glint && told_illuminator[d] >= 0) f.identity_correct = told_illuminator[d] == l.illuminator;
+      if (l.outline && d < outlines.size() && outlines[d]) {
+        compare_outlines(f, *l.outline, *outlines[d]);
+        if (*f.overlap < score.settings.min_pupil_overlap) {
+          f.outcome = Outcome::wrong_shape;  // the label stays missed
+          f.error_px.reset();
+        }
+      }
+      if (f.outcome == Outcome::found) {
+        label_found[paired[d]] = true;
+        f.nearest_px = nearest(l);
+      }
     } else {
       f.outcome = Outcome::false_positive;
       for (const Label& l : labels) {
@@ -123,6 +190,7 @@ void score_feature(Score& score, FeatureSummary& summary, const std::string& ima
     f.feature = feature;
     f.eye = labels[l].eye, f.illuminator = labels[l].illuminator, f.label = labels[l].pixel;
     f.outcome = Outcome::missed;
+    f.nearest_px = nearest(labels[l]);
     tally(summary, f);
     score.features.push_back(f);
   }
@@ -144,14 +212,32 @@ ErrorStatistics statistics(std::vector<double> errors) {
   return s;
 }
 
+NearestStatistics nearest_statistics(std::vector<double> distances) {
+  NearestStatistics s;
+  s.count = static_cast<int>(distances.size());
+  if (distances.empty()) return s;
+  std::sort(distances.begin(), distances.end());
+  s.none = static_cast<int>(std::count(distances.begin(), distances.end(), INFINITY));
+  const std::size_t n = distances.size();
+  s.median = n % 2 ? distances[n / 2] : 0.5 * (distances[n / 2 - 1] + distances[n / 2]);
+  s.p95 = distances[static_cast<std::size_t>(std::ceil(0.95 * n)) - 1];
+  s.max = distances.back();
+  return s;
+}
+
 void update_statistics(Score& score) {
-  std::vector<double> glints, pupils;
+  std::vector<double> found[2], nearest[2], overlaps;
   for (const FeatureScore& f : score.features) {
-    if (f.outcome != Outcome::found) continue;
-    (f.feature == Feature::glint ? glints : pupils).push_back(*f.error_px);
+    const int k = f.feature == Feature::glint ? 0 : 1;
+    if (f.outcome == Outcome::found) found[k].push_back(*f.error_px);
+    if (f.outcome == Outcome::found || f.outcome == Outcome::missed) nearest[k].push_back(f.nearest_px.value_or(INFINITY));
+    if (f.overlap) overlaps.push_back(*f.overlap);
   }
-  score.glints.error_px = statistics(std::move(glints));
-  score.pupils.error_px = statistics(std::move(pupils));
+  score.glints.error_px = statistics(std::move(found[0]));
+  score.pupils.error_px = statistics(std::move(found[1]));
+  score.glints.nearest_px = nearest_statistics(std::move(nearest[0]));
+  score.pupils.nearest_px = nearest_statistics(std::move(nearest[1]));
+  score.pupils.overlap = statistics(std::move(overlaps));
 }
 
 double fraction(int part, int whole) { return whole > 0 ? static_cast<double>(part) / whole : 0.0; }
@@ -164,7 +250,9 @@ double FeatureSummary::rate_within(int px) const {
   if (px == 5) return fraction(within_5px, labelled);
   throw std::invalid_argument("FeatureSummary::rate_within: " + std::to_string(px) + " px: must be 1, 2 or 5");
 }
-double FeatureSummary::false_positive_rate() const { return fraction(false_positives, detected - not_counted); }
+double FeatureSummary::false_positive_rate() const {
+  return fraction(false_positives + wrong_shape, detected - not_counted);
+}
 double FeatureSummary::identity_rate() const { return fraction(identity_correct, found); }
 
 Detections exact_detections(const std::vector<EyeInCameraTruth>& views) {
@@ -189,6 +277,10 @@ Scorer::Scorer(const ScoringSettings& settings) {
     throw std::invalid_argument("ScoringSettings: match_radius_px = " + std::to_string(settings.match_radius_px) +
                                 ": must be in (0, 1000]");
   }
+  if (!(settings.min_pupil_overlap >= 0 && settings.min_pupil_overlap <= 1)) {
+    throw std::invalid_argument("ScoringSettings: min_pupil_overlap = " + std::to_string(settings.min_pupil_overlap) +
+                                ": must be in [0, 1]");
+  }
   score_.settings = settings;
 }
 
@@ -201,19 +293,22 @@ void Scorer::add(const std::string& image, const std::vector<EyeInCameraTruth>& 
       // there is neither right nor wrong.
       const bool counted = g.status == PathStatus::ok;
       if (counted || g.status == PathStatus::off_cornea || g.status == PathStatus::occluded) {
-        glints.push_back({g.pixel, view.eye, g.illuminator, counted});
+        glints.push_back({g.pixel, view.eye, g.illuminator, counted, std::nullopt});
       }
     }
     if (view.pupil.ellipse_valid) {
-      pupils.push_back({view.pupil.ellipse.center, view.eye, -1, seen(view.pupil)});
+      pupils.push_back({view.pupil.ellipse.center, view.eye, -1, seen(view.pupil), view.pupil.ellipse});
     }
   }
   std::vector<Pixel> glint_centres, pupil_centres;
   std::vector<int> told;
+  std::vector<std::optional<Ellipse>> outlines;
   for (const Glint& g : found.glints) glint_centres.push_back(g.centre), told.push_back(g.illuminator);
-  for (const PupilFound& p : found.pupils) pupil_centres.push_back(p.centre);
-  score_feature(score_, score_.glints, image, Feature::glint, glints, glint_centres, told);
-  score_feature(score_, score_.pupils, image, Feature::pupil, pupils, pupil_centres, {});
+  for (const PupilFound& p : found.pupils) pupil_centres.push_back(p.centre), outlines.push_back(p.ellipse);
+  if (score_.settings.glints) score_feature(score_, score_.glints, image, Feature::glint, glints, glint_centres, told, {});
+  if (score_.settings.pupils) {
+    score_feature(score_, score_.pupils, image, Feature::pupil, pupils, pupil_centres, {}, outlines);
+  }
 }
 
 Score Scorer::score() const {
@@ -256,11 +351,20 @@ std::string fixed(double x, int digits = 3) {
 std::string score_table(const Score& score) {
   std::ostringstream out;
   out << score.images << " images; a detection within " << fixed(score.settings.match_radius_px, 1)
-      << " px of a label is paired with it\n\n";
+      << " px of a label is paired with it";
+  if (score.settings.min_pupil_overlap > 0) {
+    out << "; a pupil's ellipse, when given, must overlap the label's by " << fixed(score.settings.min_pupil_overlap, 2);
+  }
+  out << "\n\n";
   out << "feature  labelled  detected  within 1 px  2 px    5 px    false pos.  error px: mean   median  p95     max"
          "     identity\n";
-  const auto row = [&](const char* name, const FeatureSummary& s, bool identity) {
-    out << std::left << std::setw(9) << name << std::right << std::setw(8) << s.labelled << std::setw(10)
+  const auto row = [&](const char* name, const FeatureSummary& s, bool reported, bool identity) {
+    out << std::left << std::setw(9) << name << std::right;
+    if (!reported) {
+      out << "   not in the detections file: not scored\n";
+      return;
+    }
+    out << std::setw(8) << s.labelled << std::setw(10)
         << s.detected << std::setw(13) << fixed(s.rate_within(1)) << std::setw(8) << fixed(s.rate_within(2))
         << std::setw(8) << fixed(s.rate_within(5)) << std::setw(12) << fixed(s.false_positive_rate())
         << std::setw(16) << fixed(s.error_px.mean) << std::setw(8) << fixed(s.error_px.median) << std::setw(8)
@@ -272,10 +376,30 @@ std::string score_table(const Score& score) {
     }
     out << "\n";
   };
-  row("glints", score.glints, true);
-  row("pupils", score.pupils, false);
-  out << "\nwithin: of the labelled; false pos.: of the counted detections; identity: right light among the "
-         "found glints\n";
+  row("glints", score.glints, score.settings.glints, true);
+  row("pupils", score.pupils, score.settings.pupils, false);
+  out << "\nwithin: of the labelled; false pos.: of the counted detections; error: of the found (within the "
+         "radius); identity: right light among the found glints\n";
+  // Over every label, misses included: a tracker that often fails cannot
+  // look precise here.
+  const auto far = [](double x) { return std::isfinite(x) ? fixed(x) : std::string("none"); };
+  out << "\nover all labels, the nearest detection however far (none: no detection in the image):\n";
+  out << "feature  labelled  without a detection  median px  p95 px  max px\n";
+  const auto all_row = [&](const char* name, const FeatureSummary& s, bool reported) {
+    if (!reported) return;
+    out << std::left << std::setw(9) << name << std::right << std::setw(8) << s.nearest_px.count << std::setw(21)
+        << s.nearest_px.none << std::setw(11) << far(s.nearest_px.median) << std::setw(8) << far(s.nearest_px.p95)
+        << std::setw(8) << far(s.nearest_px.max) << "\n";
+  };
+  all_row("glints", score.glints, score.settings.glints);
+  all_row("pupils", score.pupils, score.settings.pupils);
+  if (score.settings.pupils && score.pupils.overlap.count > 0) {
+    out << "\npupil outlines (detections with an ellipse, paired by centre): overlap with the label's median "
+        << fixed(score.pupils.overlap.median) << ", mean " << fixed(score.pupils.overlap.mean) << "; "
+        << score.pupils.wrong_shape << " of " << score.pupils.overlap.count
+        << " overlap less than " << fixed(score.settings.min_pupil_overlap, 2)
+        << " (counted as missed and as false positives: the wrong outline, an iris for a pupil)\n";
+  }
   if (score.glints.not_counted + score.pupils.not_counted > 0) {
     out << "not counted (by a glint on the sclera or under a lid, or a hidden pupil): "
         << score.glints.not_counted << " glint and " << score.pupils.not_counted << " pupil detections\n";
@@ -285,27 +409,33 @@ std::string score_table(const Score& score) {
 
 std::string score_csv(const Score& score) {
   std::ostringstream out;
-  out << "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity\n";
+  out << "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity,nearest_px,"
+         "overlap,axes_error_px,angle_error_deg\n";
   const auto number = [](double x) {
     std::ostringstream s;
     s << std::setprecision(10) << x;
     return s.str();
   };
+  const auto optional = [&](const std::optional<double>& x) { return x ? number(*x) : std::string(); };
   for (const FeatureScore& f : score.features) {
     out << csv_cell(f.image) << ',' << to_string(f.feature) << ',' << (f.eye >= 0 ? std::to_string(f.eye) : "")
         << ',' << (f.illuminator >= 0 ? std::to_string(f.illuminator) : "") << ',' << to_string(f.outcome) << ','
         << (f.label ? number(f.label->u) + ',' + number(f.label->v) : ",") << ','
         << (f.detection ? number(f.detection->u) + ',' + number(f.detection->v) : ",") << ','
-        << (f.error_px ? number(*f.error_px) : "") << ','
-        << (f.identity_correct ? (*f.identity_correct ? "correct" : "wrong") : "") << '\n';
+        << optional(f.error_px) << ','
+        << (f.identity_correct ? (*f.identity_correct ? "correct" : "wrong") : "") << ','
+        << optional(f.nearest_px) << ',' << optional(f.overlap) << ',' << optional(f.axes_error_px) << ','
+        << optional(f.angle_error_deg) << '\n';
   }
   return out.str();
 }
 
 std::string score_json(const Score& score) {
   using json = nlohmann::json;
-  const auto summary = [](const FeatureSummary& s, bool identity) {
+  const auto finite = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+  const auto summary = [&](const FeatureSummary& s, bool reported, bool identity) {
     json j;
+    j["reported"] = reported;
     j["labelled"] = s.labelled;
     j["detected"] = s.detected;
     j["found"] = s.found;
@@ -315,18 +445,27 @@ std::string score_json(const Score& score) {
     j["not_counted"] = s.not_counted;
     j["error_px"] = {{"count", s.error_px.count}, {"mean", s.error_px.mean}, {"median", s.error_px.median},
                      {"p95", s.error_px.p95},     {"max", s.error_px.max}};
+    // null: beyond every detection (the share without one reaches it).
+    j["nearest_px"] = {{"count", s.nearest_px.count}, {"none", s.nearest_px.none},
+                       {"median", finite(s.nearest_px.median)}, {"p95", finite(s.nearest_px.p95)},
+                       {"max", finite(s.nearest_px.max)}};
     if (identity) {
       j["identity_told"] = s.identity_told;
       j["identity_correct"] = s.identity_correct;
       j["identity_rate"] = s.identity_told > 0 ? json(s.identity_rate()) : json(nullptr);
+    } else {
+      j["wrong_shape"] = s.wrong_shape;
+      j["overlap"] = {{"count", s.overlap.count}, {"mean", s.overlap.mean}, {"median", s.overlap.median},
+                      {"max", s.overlap.max}};
     }
     return j;
   };
   json root;
   root["images"] = score.images;
   root["match_radius_px"] = score.settings.match_radius_px;
-  root["glints"] = summary(score.glints, true);
-  root["pupils"] = summary(score.pupils, false);
+  root["min_pupil_overlap"] = score.settings.min_pupil_overlap;
+  root["glints"] = summary(score.glints, score.settings.glints, true);
+  root["pupils"] = summary(score.pupils, score.settings.pupils, false);
   return root.dump(2) + "\n";
 }
 

@@ -16,10 +16,27 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "purkinje/trackers/scoring.h"
 
 namespace purkinje::trackers {
+
+// A detections file as read. Trackers write files differently, and the
+// reader takes what they write (docs/trackers.md, "Detections files"):
+// a UTF-8 byte-order mark, spaces around cells, columns it does not know
+// (ignored and listed), failure rows (no centre: u_px and v_px both empty,
+// both nan, or both -1: the image was read and nothing of that feature
+// found), and confidence -1 ("none").
+struct DetectionsFile {
+  std::map<std::string, Detections> images;  // by the name the file gives, failure rows' images included
+  std::map<std::string, int> line_of;        // each image's first line
+  std::vector<std::string> ignored_columns;  // header columns not read
+  int failure_rows = 0;
+  bool has_glints = false, has_pupils = false;  // rows (failure rows too) of each feature
+};
+DetectionsFile read_detections_file(const std::filesystem::path& file);
+DetectionsFile parse_detections_file(std::string text, const std::filesystem::path& file);
 
 // By image (as the file names it). Throws std::runtime_error naming the
 // file, the line, the column, its text and the rule for a malformed file.

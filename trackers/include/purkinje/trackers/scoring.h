@@ -43,6 +43,14 @@ Detections exact_detections(const std::vector<EyeInCameraTruth>& views);
 
 struct ScoringSettings {
   double match_radius_px = 5;  // the field's usual figure; in (0, 1000]
+  // A pupil whose tracker gives its ellipse is found only when that
+  // ellipse overlaps the label's by at least this much (intersection over
+  // union): an ellipse fitted to the iris, concentric with the pupil,
+  // overlaps a 2 mm pupil's by about 0.1. In [0, 1]; 0: centres only.
+  double min_pupil_overlap = 0.5;
+  // Features the tracker reports at all: a pupil-only tracker's glints
+  // are not scored as missed (the table says they were not reported).
+  bool glints = true, pupils = true;
 };
 
 enum class Feature { glint, pupil };
@@ -51,6 +59,7 @@ enum class Outcome {
   missed,          // a label no detection was paired with
   false_positive,  // a detection no label was paired with
   not_counted,     // a detection by a label the score leaves out
+  wrong_shape,     // a pupil detection by a label whose ellipse overlaps it too little (the label: missed)
 };
 const char* to_string(Feature f);
 const char* to_string(Outcome o);
@@ -65,6 +74,14 @@ struct FeatureScore {
   Outcome outcome = Outcome::missed;
   std::optional<double> error_px;  // when found
   std::optional<bool> identity_correct;  // a found glint whose light the tracker told
+  // A label's: the distance to the nearest detection of its feature in its
+  // image whatever the radius; absent when there is none.
+  std::optional<double> nearest_px;
+  // A pupil detection with an ellipse, paired by its centre: overlap with
+  // the label's ellipse (intersection over union), the larger error of the
+  // two semi-axes, and the angle's error (0 to 90 deg; absent for a label
+  // within 5% of a circle, whose angle means nothing).
+  std::optional<double> overlap, axes_error_px, angle_error_deg;
 };
 
 struct ErrorStatistics {
@@ -72,12 +89,24 @@ struct ErrorStatistics {
   double mean = 0, median = 0, p95 = 0, max = 0;  // 0 when count is 0
 };
 
+// Over every label, misses included: the distance to the nearest detection
+// of its kind in its image, however far, and infinite where the image has
+// none. A tracker that often fails cannot look precise here.
+struct NearestStatistics {
+  int count = 0;  // labels
+  int none = 0;   // labels in images without a detection of their kind
+  double median = 0, p95 = 0, max = 0;  // infinite where the share of `none` reaches them
+};
+
 struct FeatureSummary {
   int labelled = 0;  // labels counted
   int detected = 0;  // detections made, counted or not
   int found = 0, within_1px = 0, within_2px = 0, within_5px = 0;
   int false_positives = 0, not_counted = 0;
+  int wrong_shape = 0;                  // pupils: paired by centre, outline not the label's
   ErrorStatistics error_px;             // over the found
+  NearestStatistics nearest_px;         // over all labels
+  ErrorStatistics overlap;              // pupils with an ellipse, paired by centre: intersection over union
   int identity_told = 0, identity_correct = 0;  // glints only
   // Fractions, 0 when there is nothing to divide by.
   double rate_within(int px) const;     // 1, 2 or 5 px: of the labelled

@@ -246,51 +246,70 @@ void remove_stale_temporaries(const std::filesystem::path& dir) {
   }
 }
 
-// Whether every camera's files of a variation are in place and consistent:
-// labels that this run would write (seed, mode, samples) whose recorded
-// size and CRC-32 of the PNG and EXR match the files beside them.
+// Whether every camera's files of a variation are in place and are what
+// this run would write: labels whose scene part (cameras, lights, eyes:
+// the variation's pose and pupil) and render settings (every option that
+// changes a byte) equal this run's, and whose recorded size and CRC-32 of
+// the PNG and EXR match the files beside them.
 bool unit_complete(const std::filesystem::path& dir, const std::string& stem_prefix, const purkinje::Scene& scene,
                    const std::vector<int>& cameras, const purkinje::renderer::RenderOptions& options) {
   using json = nlohmann::json;
-  for (int camera : cameras) {
-    const std::string stem = file_stem(stem_prefix, scene.cameras[camera].name());
-    try {
+  try {
+    const json truth = json::parse(purkinje::truth_to_json(scene, purkinje::compute_truth(scene)));
+    for (int camera : cameras) {
+      const std::string stem = file_stem(stem_prefix, scene.cameras[camera].name());
       const json labels = json::parse(purkinje::read_input_file(dir / (stem + ".json"), purkinje::kMaxLabelsFileBytes,
                                                                 "a labels file"));
+      for (const char* key : {"labels_format", "scene", "units", "cameras", "illuminators", "eyes"}) {
+        if (labels.at(key) != truth.at(key)) return false;
+      }
       const json& render = labels.at("render");
-      if (render.at("seed").get<std::uint64_t>() != options.seed ||
-          render.at("mode").get<std::string>() != purkinje::renderer::to_string(options.mode) ||
-          render.at("samples_per_pixel").get<int>() != options.samples_per_pixel ||
-          render.at("edge_samples_per_pixel").get<int>() != purkinje::renderer::edge_samples_per_pixel(options)) {
-        return false;
+      // Named: items() does not keep a temporary alive.
+      const json settings = json::parse(purkinje::renderer::render_settings_json(scene, camera, options));
+      for (const auto& [key, value] : settings.items()) {
+        if (render.at(key) != value) return false;
       }
       const json& files = render.at("files");
-      for (const char* kind : {"image", "exr"}) {
+      for (const auto& [kind, extension] : {std::pair{"image", ".png"}, std::pair{"exr", ".exr"}}) {
         const std::string name = files.at(kind).get<std::string>();
-        const purkinje::FileCheck check =
-            purkinje::file_check_of(purkinje::read_input_file(dir / name, purkinje::kMaxImageFileBytes, "an image file"));
-        if (name != stem + (std::string(kind) == "image" ? ".png" : ".exr") ||
-            files.at(std::string(kind) + "_bytes").get<std::uintmax_t>() != check.bytes ||
+        if (name != stem + extension) return false;
+        const purkinje::FileCheck check = purkinje::file_check_of_file(dir / name);
+        if (files.at(std::string(kind) + "_bytes").get<std::uintmax_t>() != check.bytes ||
             files.at(std::string(kind) + "_crc32").get<std::string>() != purkinje::crc32_text(check.crc32)) {
           return false;
         }
       }
-    } catch (const std::exception&) {
-      return false;  // missing, cut short, or not ours: rendered again
     }
+  } catch (const std::exception&) {
+    return false;  // missing, cut short, or not this run's: rendered again
   }
   return true;
 }
 
 // Appends a line to the index and flushes it to the disk.
 void append_line(const std::filesystem::path& file, const std::string& line) {
+  const auto fail = [&](int error) {
+    throw std::runtime_error(file.string() + ": cannot append: " + std::strerror(error));
+  };
   const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
-  if (fd < 0) throw std::runtime_error(file.string() + ": cannot append: " + std::strerror(errno));
-  const ssize_t written = ::write(fd, line.data(), line.size());
-  const int error = errno;
-  const bool ok = written == static_cast<ssize_t>(line.size()) && ::fsync(fd) == 0;
+  if (fd < 0) fail(errno);
+  std::size_t done = 0;
+  while (done < line.size()) {
+    const ssize_t written = ::write(fd, line.data() + done, line.size() - done);
+    if (written < 0 && errno == EINTR) continue;
+    if (written < 0) {
+      const int error = errno;
+      ::close(fd);
+      fail(error);
+    }
+    done += static_cast<std::size_t>(written);
+  }
+  if (::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail(error);
+  }
   ::close(fd);
-  if (!ok) throw std::runtime_error(file.string() + ": cannot append: " + std::strerror(error));
 }
 
 int run_render(const RenderRequest& request) {
@@ -307,6 +326,7 @@ int run_render(const RenderRequest& request) {
     if (cameras.empty()) {
       throw std::invalid_argument(request.scene_file + ": no camera named '" + request.camera + "'");
     }
+    r::embree_device();  // a bad PURKINJE_EMBREE_CONFIG is named now, not after the first render
     if (request.variations > 0) {
       if (scene.eyes.empty()) throw std::invalid_argument(request.scene_file + ": --variations needs an eye");
       constexpr double kDegree = std::numbers::pi / 180;
@@ -328,13 +348,19 @@ int run_render(const RenderRequest& request) {
       }
     }
   } else {
+    // Every unit's names, checked now: a folder or FIFO in the way would
+    // otherwise stop the run after hours.
     outputs.push_back("variations.csv");
-    const std::filesystem::path scene_file(request.scene_file);
+    const int digits = std::max(4, static_cast<int>(std::to_string(variations.size() - 1).size()));
     const std::string prefix = (scene.name.empty() ? std::string("scene") : scene.name) + "_v";
-    if (purkinje::tools::same_file(scene_file.parent_path().empty() ? "." : scene_file.parent_path(),
-                                   request.output_dir) &&
-        scene_file.filename().string().starts_with(prefix)) {
-      outputs.push_back(scene_file.filename().string());
+    for (std::size_t k = 0; k < variations.size(); ++k) {
+      std::string index = std::to_string(k);
+      index.insert(0, static_cast<std::size_t>(digits) - index.size(), '0');
+      for (int camera : cameras) {
+        for (const char* extension : {".png", ".exr", ".json"}) {
+          outputs.push_back(file_stem(prefix + index, scene.cameras[camera].name()) + extension);
+        }
+      }
     }
   }
   if (const auto refusal = purkinje::tools::check_output_folder(request.output_dir, {}, outputs, {request.scene_file})) {
@@ -378,34 +404,45 @@ int run_render(const RenderRequest& request) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
-    if (request.resume) {
-      if (std::filesystem::exists(index_file)) {
-        const std::string text = purkinje::read_input_file(index_file, std::uintmax_t{1} << 32, "an index");
-        if (text.rfind(header, 0) != 0) {
-          std::cerr << "purkinje render: error: " << index_file.string()
-                    << ": not the index of a --variations set: --resume continues only such a set\n";
-          return kUsageError;
-        }
-        // Whole lines only: a kill may have cut the last one short.
-        for (std::size_t at = header.size(), end; (end = text.find('\n', at)) != std::string::npos; at = end + 1) {
-          const std::string line = text.substr(at, end + 1 - at);
-          indexed[std::strtoull(line.c_str(), nullptr, 10)] = line;
-        }
+    if (request.resume && std::filesystem::exists(index_file)) {
+      const std::string text = purkinje::read_input_file(index_file, std::uintmax_t{1} << 32, "an index");
+      if (text.rfind(header, 0) != 0) {
+        std::cerr << "purkinje render: error: " << index_file.string()
+                  << ": not the index of a --variations set: --resume continues only such a set\n";
+        return kUsageError;
       }
-    } else {
-      purkinje::write_file_atomically(index_file, header);
+      // Whole lines only: a kill may have cut the last one short.
+      for (std::size_t at = header.size(), end; (end = text.find('\n', at)) != std::string::npos; at = end + 1) {
+        const std::string line = text.substr(at, end + 1 - at);
+        indexed[std::strtoull(line.c_str(), nullptr, 10)] = line;
+      }
     }
   } catch (const std::exception& error) {
     std::cerr << "purkinje render: error: " << error.what() << "\n";
     return kOutputError;
   }
   for (const auto& [k, line] : indexed) {
-    if (k >= variations.size() || line != line_of(k)) {
+    if (k >= variations.size()) {
+      std::cerr << "purkinje render: error: " << index_file.string() << " lists variation " << k << "; this run has "
+                << variations.size() << ": --resume needs the options of the run it continues\n";
+      return kUsageError;
+    }
+    if (line != line_of(k)) {
       std::cerr << "purkinje render: error: " << index_file.string() << ": variation " << k
                 << " was made with other options (" << line.substr(0, line.size() - 1)
                 << "): --resume needs the options of the run it continues\n";
       return kUsageError;
     }
+  }
+  // The index starts whole: the header and the whole lines kept (a line a
+  // kill cut short would otherwise run into the next one appended).
+  try {
+    std::string start = header;
+    for (const auto& [k, line] : indexed) start += line;
+    purkinje::write_file_atomically(index_file, start);
+  } catch (const std::exception& error) {
+    std::cerr << "purkinje render: error: " << error.what() << "\n";
+    return kOutputError;
   }
   if (request.resume) remove_stale_temporaries(dir);
   std::size_t resumed = 0;

@@ -23,6 +23,7 @@
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
+#include "purkinje/models/spelling.h"
 #include "purkinje/trackers/detections_file.h"
 #include "purkinje/trackers/glints.h"
 #include "purkinje/trackers/image_file.h"
@@ -53,12 +54,25 @@ std::vector<fs::path> labels_files(const std::vector<std::string>& inputs) {
       std::set<fs::path> image_stems;
       for (const fs::directory_entry& e : fs::directory_iterator(path)) {
         if (!e.is_regular_file()) continue;
-        if (e.path().extension() == ".json") in_folder.push_back(e.path());
-        else image_stems.insert(e.path().stem());
+        const fs::path extension = e.path().extension();
+        if (extension == ".json") in_folder.push_back(e.path());
+        if (extension == ".png" || extension == ".tif" || extension == ".tiff" || extension == ".pgm") {
+          image_stems.insert(e.path().stem());
+        }
       }
-      std::erase_if(in_folder, [&](const fs::path& f) { return !image_stems.count(f.stem()); });
+      std::vector<std::string> left_out;
+      std::erase_if(in_folder, [&](const fs::path& f) {
+        const bool labels = image_stems.count(f.stem()) > 0;
+        if (!labels) left_out.push_back(f.filename().string());
+        return !labels;
+      });
       if (in_folder.empty()) {
         throw std::runtime_error(input + ": a folder without labels files (.json beside an image of the same name)");
+      }
+      if (!left_out.empty()) {
+        std::sort(left_out.begin(), left_out.end());
+        std::cerr << input << ": " << left_out.size() << " .json files without an image beside them left out ("
+                  << left_out.front() << (left_out.size() > 1 ? ", ..." : "") << ")\n";
       }
       std::sort(in_folder.begin(), in_folder.end());
       files.insert(files.end(), in_folder.begin(), in_folder.end());
@@ -79,6 +93,18 @@ std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs, b
   for (const fs::path& file : files) {
     LabelledImage image{"", read_image_labels(file)};
     image.name = image.labels.image.filename().string();
+    // The image's size against its labels' record, for every command: a
+    // unit a killed run left half replaced is refused even where the
+    // pixels are not read (score). track checks the CRC-32 too.
+    if (image.labels.image_check) {
+      std::error_code ec;
+      const std::uintmax_t bytes = fs::file_size(image.labels.image, ec);
+      if (!ec && bytes != image.labels.image_check->bytes) {
+        throw std::runtime_error(image.labels.image.string() + ": does not match its labels (" + std::to_string(bytes) +
+                                 " bytes; the labels say " + std::to_string(image.labels.image_check->bytes) +
+                                 "): a unit a run left half replaced; render it again (render --resume)");
+      }
+    }
     const auto [it, fresh] = seen.emplace(image.name, file);
     if (!fresh) {
       throw std::runtime_error(file.string() + ": labels an image named " + image.name + ", as " +
@@ -261,12 +287,14 @@ int run_track(const TrackRequest& request) {
 // name itself, a path ending in it (trackers write where they read), or
 // its name without the extension; empty when none or several match.
 std::string resolve_image(const std::string& name, const std::map<std::string, std::string>& by_name,
-                          const std::multimap<std::string, std::string>& by_stem) {
+                          const std::multimap<std::string, std::string>& by_stem, bool& ambiguous) {
+  ambiguous = false;
   if (by_name.count(name)) return name;
   const fs::path path(name);
   if (by_name.count(path.filename().string())) return path.filename().string();
   const auto [first, last] = by_stem.equal_range(path.filename().string());
   if (first != last && std::next(first) == last) return first->second;
+  ambiguous = first != last;
   return {};
 }
 
@@ -293,13 +321,26 @@ int run_score(const ScoreRequest& request) {
   // Rows of images outside the inputs are left out, not fatal: a tracker
   // run over a whole folder is scored on the part that is labelled.
   std::map<std::string, trackers::Detections> detections;
+  std::map<std::string, std::string> named_as;  // labelled image -> the file's name for it
   int skipped_images = 0, below_confidence = 0;
   std::string first_skipped;
   for (auto& [name, found] : file.images) {
-    const std::string image = resolve_image(name, by_name, by_stem);
+    bool ambiguous = false;
+    const std::string image = resolve_image(name, by_name, by_stem, ambiguous);
     if (image.empty()) {
-      if (skipped_images++ == 0) first_skipped = name + " (line " + std::to_string(file.line_of.at(name)) + ")";
+      if (skipped_images++ == 0) {
+        first_skipped = name + " (line " + std::to_string(file.line_of.at(name)) + ")" +
+                        (ambiguous ? ": its name without extension is several images'" : "");
+      }
       continue;
+    }
+    // Two names for one image (cam0/f1.png and cam1/f1.png) would merge
+    // two images' detections.
+    if (const auto [it, fresh] = named_as.emplace(image, name); !fresh) {
+      std::cerr << "purkinje score: error: " << request.detections_file << ": lines "
+                << file.line_of.at(it->second) << " (" << it->second << ") and " << file.line_of.at(name) << " ("
+                << name << ") both name the labelled image " << image << "\n";
+      return kBadInput;
     }
     trackers::Detections& d = detections[image];
     d.glints.insert(d.glints.end(), found.glints.begin(), found.glints.end());
@@ -314,7 +355,14 @@ int run_score(const ScoreRequest& request) {
   std::ostringstream notes;
   if (!file.ignored_columns.empty()) {
     notes << "columns not read:";
-    for (const std::string& c : file.ignored_columns) notes << " " << c;
+    for (const std::string& c : file.ignored_columns) {
+      notes << " " << c;
+      // A misspelt optional column would silently read as absent.
+      if (const auto meant = closest_match(c, {"image", "feature", "u_px", "v_px", "illuminator", "semi_axis_1_px",
+                                               "semi_axis_2_px", "angle_deg", "confidence"})) {
+        notes << " (did you mean " << *meant << "?)";
+      }
+    }
     notes << "\n";
   }
   if (file.failure_rows > 0) notes << file.failure_rows << " rows say nothing was found (failed frames)\n";
@@ -332,8 +380,8 @@ int run_score(const ScoreRequest& request) {
   trackers::ScoringSettings settings;
   settings.match_radius_px = request.match_radius_px;
   settings.min_pupil_overlap = request.min_pupil_overlap;
-  settings.glints = file.has_glints;
-  settings.pupils = file.has_pupils;
+  settings.score_glints = file.has_glints;
+  settings.score_pupils = file.has_pupils;
   trackers::Scorer scorer(settings);
   const trackers::Detections none;
   for (const LabelledImage& image : images) {

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -117,6 +118,35 @@ FileCheck file_check_of(std::string_view contents) {
     at += n;
   }
   return {contents.size(), static_cast<std::uint32_t>(crc)};
+}
+
+FileCheck file_check_of_file(const std::filesystem::path& file) {
+  std::string why;
+  const int fd = open_input(file, why);
+  if (fd < 0) throw InputFileError(file, why);
+  why = reason(fd, std::numeric_limits<std::uintmax_t>::max(), "a file");
+  if (!why.empty()) {
+    ::close(fd);
+    throw InputFileError(file, why);
+  }
+  uLong crc = ::crc32(0L, Z_NULL, 0);
+  FileCheck check;
+  unsigned char buffer[1 << 16];
+  for (;;) {
+    const ssize_t got = ::read(fd, buffer, sizeof buffer);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) {
+      const int error = errno;
+      ::close(fd);
+      throw InputFileError(file, std::string("cannot be read: ") + std::strerror(error));
+    }
+    if (got == 0) break;
+    crc = ::crc32(crc, buffer, static_cast<uInt>(got));
+    check.bytes += static_cast<std::uintmax_t>(got);
+  }
+  ::close(fd);
+  check.crc32 = static_cast<std::uint32_t>(crc);
+  return check;
 }
 
 std::string crc32_text(std::uint32_t crc32) {

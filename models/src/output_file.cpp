@@ -30,23 +30,31 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_slots;
 
-void register_temporary(const std::filesystem::path& temporary) {
+// Registered before the file exists, so that no moment leaves a created
+// temporary unknown to the handler (unlinking a name not yet created is
+// harmless).
+Slot* register_temporary(const std::filesystem::path& temporary) {
   const std::string& text = temporary.native();
-  if (text.size() >= kPathBytes) return;
+  if (text.size() >= kPathBytes) return nullptr;
   for (Slot& slot : g_slots) {
     int expected = 0;
     if (!slot.state.compare_exchange_strong(expected, 1)) continue;
     std::memcpy(slot.path, text.c_str(), text.size() + 1);
     slot.state.store(2);
-    return;
+    return &slot;
   }
+  return nullptr;
 }
 
-extern "C" void remove_temporaries_and_exit(int signal) {
+// Removes the temporaries, then dies by the signal itself (default action,
+// raised again): the parent sees a process the signal ended, so a shell
+// loop stops on Ctrl-C and reports 130 or 143.
+extern "C" void remove_temporaries_and_die(int signal) {
   for (Slot& slot : g_slots) {
     if (slot.state.load() == 2) ::unlink(slot.path);  // async-signal-safe
   }
-  ::_exit(128 + signal);
+  ::signal(signal, SIG_DFL);
+  ::raise(signal);
 }
 
 std::atomic<unsigned> g_counter{0};
@@ -64,12 +72,13 @@ std::filesystem::path create_temporary(const std::filesystem::path& target) {
     name += '.';
     name += std::to_string(g_counter++);
     const std::filesystem::path temporary = directory / name;
+    Slot* slot = register_temporary(temporary);
     const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
-      register_temporary(temporary);
       ::close(fd);
       return temporary;
     }
+    if (slot) slot->state.store(0);  // not ours: another process's file, or none
     if (errno != EEXIST || attempt > 100) {
       throw std::runtime_error(target.string() + ": cannot create a temporary file: " + std::strerror(errno));
     }
@@ -103,11 +112,16 @@ bool is_temporary_name(std::string_view name) {
 }
 
 void remove_temporaries_on_signals() {
-  struct sigaction action {};
-  action.sa_handler = &remove_temporaries_and_exit;
-  sigemptyset(&action.sa_mask);
-  ::sigaction(SIGINT, &action, nullptr);
-  ::sigaction(SIGTERM, &action, nullptr);
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    ::sigaction(signal, nullptr, &old);
+    // A signal the parent ignores (a background job's SIGINT) stays ignored.
+    if (old.sa_handler == SIG_IGN) continue;
+    struct sigaction action {};
+    action.sa_handler = &remove_temporaries_and_die;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(signal, &action, nullptr);
+  }
 }
 
 void stop_point(const char* event) {

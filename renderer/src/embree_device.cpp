@@ -55,6 +55,7 @@ std::string_view trim(std::string_view s) {
 }  // namespace
 
 std::string cpu_isa() {
+#if defined(__x86_64__) || defined(__i386__)
   // What each of Embree's targets needs of the CPU (Embree's isa.h).
   __builtin_cpu_init();
   if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
@@ -68,6 +69,7 @@ std::string cpu_isa() {
   }
   if (__builtin_cpu_supports("avx")) return "avx";
   if (__builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt")) return "sse4.2";
+#endif
   return "sse2";
 }
 

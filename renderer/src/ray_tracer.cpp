@@ -741,7 +741,7 @@ struct RayTracer::Impl {
     query.lanes = &lane;
     query.skip_cornea = skip_cornea;
 
-    RTCRayHit rayhit;
+    RTCRayHit rayhit{};  // every field written: Embree is given no uninitialised data
     RTCRay& ray = rayhit.ray;
     ray.org_x = static_cast<float>(start.x);
     ray.org_y = static_cast<float>(start.y);

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <memory>
+#include <stdexcept>
 #include <nlohmann/json.hpp>
 
 #include "purkinje/models/input_file.h"
@@ -58,6 +60,22 @@ bool saturates(const RenderResult& result, const GlintImage& g, const Camera& ca
   return false;
 }
 
+// What decides an image's pixels besides the scene: every option that
+// changes a byte of the files.
+json settings_document(const Camera& camera, const RenderOptions& options) {
+  json settings = json::object();
+  settings["mode"] = to_string(options.mode);
+  settings["samples_per_pixel"] = options.samples_per_pixel;
+  // What adaptive sampling gave the pixels it refined (no more than the rest: off).
+  settings["edge_samples_per_pixel"] = edge_samples_per_pixel(options);
+  settings["seed"] = options.seed;
+  settings["iris_cache_resolution"] = options.iris_cache_resolution;
+  if (options.mode == RenderMode::reference) settings["photons_per_light"] = options.reference_photons_per_light;
+  settings["glint_masks"] = options.per_light_glint_masks;
+  settings["sensor"] = sensor_json(camera.sensor(), options.noise);
+  return settings;
+}
+
 // The labels without the image files' checks (added once they are written).
 json labels_document(const Scene& scene, const RenderResult& result, const RenderOptions& options,
                      const RenderFiles& files) {
@@ -69,13 +87,8 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
   render["files"] = {{"image", files.image.filename().string()},
                      {"exr", files.exr.filename().string()},
                      {"labels", files.labels.filename().string()}};
-  render["mode"] = to_string(options.mode);
-  render["samples_per_pixel"] = options.samples_per_pixel;
-  // What adaptive sampling gave the pixels it refined (no more than the rest: off).
-  render["edge_samples_per_pixel"] = edge_samples_per_pixel(options);
-  render["seed"] = options.seed;
-  render["iris_cache_resolution"] = options.iris_cache_resolution;
-  render["sensor"] = sensor_json(camera.sensor(), options.noise);
+  const json settings = settings_document(camera, options);  // named: items() does not keep a temporary alive
+  for (const auto& [key, value] : settings.items()) render[key] = value;
   json glints = json::array();
   for (const GlintImage& g : result.glints) {
     json out = json::object();
@@ -94,16 +107,15 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
 }
 
 void add_check(json& files, const std::string& kind, const std::filesystem::path& file) {
-  const FileCheck check = file_check_of(read_input_file(file, kMaxImageFileBytes, "an image file"));
+  const FileCheck check = file_check_of_file(file);
   files[kind + "_bytes"] = check.bytes;
   files[kind + "_crc32"] = crc32_text(check.crc32);
 }
 
 }  // namespace
 
-std::string render_labels_json(const Scene& scene, const RenderResult& result,
-                               const RenderOptions& options, const RenderFiles& files) {
-  return labels_document(scene, result, options, files).dump(2) + "\n";
+std::string render_settings_json(const Scene& scene, int camera, const RenderOptions& options) {
+  return settings_document(scene.cameras.at(static_cast<std::size_t>(camera)), options).dump();
 }
 
 RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std::string& stem,
@@ -124,9 +136,11 @@ RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std
     json& names = (*labels)["render"]["files"];
     add_check(names, "image", set.temporary_of(files.image));
     add_check(names, "exr", set.temporary_of(files.exr));
-    // write_file_atomically renames its own temporary onto `t`; FileSet
-    // then renames `t` into place with the others.
-    write_file_atomically(t, labels->dump(2) + "\n");
+    // `t` is FileSet's own temporary, flushed and renamed into place by it.
+    std::ofstream out(t, std::ios::binary | std::ios::trunc);
+    out << labels->dump(2) << "\n";
+    out.close();
+    if (!out) throw std::runtime_error(t.string() + ": cannot write the labels");
   });
   return files;
 }

@@ -110,3 +110,31 @@ TEST_F(InputFile, LabelsWithANumberBeyondDoublesRangeAreNotJson) {
 
 }  // namespace
 }  // namespace purkinje
+
+namespace purkinje {
+namespace {
+
+// The CRC-32 labels record is zlib's (ISO-HDLC): the standard check value
+// of "123456789" is 0xcbf43926.
+TEST(FileCheck, IsTheStandardCrc32WithTheSize) {
+  const FileCheck check = file_check_of("123456789");
+  EXPECT_EQ(check.bytes, 9u);
+  EXPECT_EQ(check.crc32, 0xcbf43926u);
+  EXPECT_EQ(crc32_text(check.crc32), "cbf43926");
+  EXPECT_EQ(crc32_text(0x1a), "0000001a");
+  EXPECT_EQ(file_check_of("").crc32, 0u);
+}
+
+TEST(FileCheck, OfAFileReadInPiecesEqualsOfItsContents) {
+  const auto file = std::filesystem::temp_directory_path() / ("purkinje_check_" + std::to_string(::getpid()));
+  std::string text;
+  for (int i = 0; i < 200000; ++i) text += static_cast<char>('a' + i % 26);
+  std::ofstream(file, std::ios::binary) << text;
+  EXPECT_EQ(file_check_of_file(file), file_check_of(text));
+  std::filesystem::remove(file);
+  EXPECT_THROW(file_check_of_file(file), InputFileError);
+  EXPECT_THROW(file_check_of_file("/dev/zero"), InputFileError);
+}
+
+}  // namespace
+}  // namespace purkinje

@@ -127,6 +127,11 @@ TEST_F(DetectionsCsv, FailedFramesAsTrackersWriteThemAreFramesWithNothingFound) 
   EXPECT_TRUE(f.has_pupils);
   EXPECT_FALSE(f.has_glints);
   EXPECT_EQ(f.line_of.at("c.png"), 4);
+  // -1 as a float, and confidence -1.0, read alike.
+  const DetectionsFile g = parse_detections_file(
+      "image,feature,u_px,v_px,confidence\ne.png,pupil,-1.0,-1.0,\nf.png,pupil,3,4,-1.0\n", "t.csv");
+  EXPECT_EQ(g.failure_rows, 1);
+  EXPECT_FALSE(g.images.at("f.png").pupils.at(0).confidence);
   // Half a centre is an error, not a failure.
   EXPECT_NE(error_of("image,feature,u_px,v_px\na.png,pupil,,3\n").find(":2: column u_px"), std::string::npos);
 }
@@ -142,6 +147,9 @@ TEST_F(DetectionsCsv, ReadsPastAByteOrderMarkSpacesAndColumnsItDoesNotKnow) {
   ASSERT_EQ(f.images.at("a.png").pupils.size(), 1u);
   EXPECT_EQ(f.images.at("a.png").pupils[0].centre.u, 10.5);
   EXPECT_EQ(f.images.at("a.png").pupils[0].centre.v, 20.25);
+  // Inside quotes, spaces are the cell's.
+  const DetectionsFile q = parse_detections_file("image,feature,u_px,v_px\n\" my eye.png \", pupil,1,2\n", "t.csv");
+  EXPECT_TRUE(q.images.count(" my eye.png "));
 }
 
 TEST_F(DetectionsCsv, RefusesAnEllipseAngleBeyondAFullTurn) {

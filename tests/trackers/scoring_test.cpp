@@ -252,6 +252,15 @@ TEST(Scorer, AnIrisEllipseConcentricWithThePupilIsNotAPupil) {
       EXPECT_NEAR(*f.axes_error_px, 0.5, 1e-12);
     }
   }
+  // Both fits reported, the iris's centre nearer: the pupil's still pairs.
+  Detections both;
+  both.pupils = {{{100, 100}, Ellipse{{100, 100}, 30, 30, 0}, std::nullopt},
+                 {{100.3, 100}, Ellipse{{100.3, 100}, 10, 10, 0}, std::nullopt}};
+  Scorer two;
+  two.add("both.png", {round_pupil({100, 100}, 10)}, both);
+  EXPECT_EQ(two.score().pupils.found, 1);
+  EXPECT_EQ(two.score().pupils.wrong_shape, 1);
+  EXPECT_NEAR(two.score().pupils.error_px.max, 0.3, 1e-12);
   // With the check off, centres alone decide.
   ScoringSettings centres_only;
   centres_only.min_pupil_overlap = 0;
@@ -286,7 +295,7 @@ TEST(Scorer, FiguresOverAllLabelsCountTheMisses) {
 // A pupil-only tracker's glints are not "0 of N found": they are not scored.
 TEST(Scorer, AFeatureTheTrackerDoesNotReportIsNotScored) {
   ScoringSettings settings;
-  settings.glints = false;
+  settings.score_glints = false;
   Scorer scorer(settings);
   EyeInCameraTruth view = round_pupil({100, 100}, 10);
   view.glints = {glint(0, PathStatus::ok, {90, 90})};

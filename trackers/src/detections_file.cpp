@@ -18,38 +18,48 @@ namespace {
 
 // The cells of one CSV line (RFC 4180 quoting; no line breaks in cells).
 // False when a quote is not closed.
+// Spaces and tabs outside quotes are no part of a cell ("a.png, glint, 3",
+// as CSV written by hand or by printf has them); inside quotes they are.
 bool split_cells(const std::string& line, std::vector<std::string>& cells) {
   cells.assign(1, "");
-  bool quoted = false;
+  bool quoted = false, was_quoted = false;
+  std::string pending;  // unquoted blanks, kept only if more of the cell follows
+  const auto add = [&](char c) {
+    cells.back() += pending;
+    pending.clear();
+    cells.back() += c;
+  };
   for (std::size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
     if (quoted) {
       if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        cells.back() += '"', ++i;
+        add('"'), ++i;
       } else if (c == '"') {
         quoted = false;
       } else {
-        cells.back() += c;
+        add(c);
       }
     } else if (c == '"') {
-      quoted = true;
+      quoted = was_quoted = true;
+      pending.clear();
     } else if (c == ',') {
       cells.emplace_back();
+      pending.clear();
+      was_quoted = false;
+    } else if (c == ' ' || c == '\t') {
+      if (!cells.back().empty() || was_quoted) pending += c;
     } else {
-      cells.back() += c;
+      add(c);
     }
-  }
-  // Spaces and tabs around a cell are not part of it ("a.png, glint, 3"),
-  // as readers of CSV written by hand or by printf expect.
-  for (std::string& cell : cells) {
-    const auto first = cell.find_first_not_of(" \t");
-    if (first == std::string::npos) {
-      cell.clear();
-      continue;
-    }
-    cell = cell.substr(first, cell.find_last_not_of(" \t") - first + 1);
   }
   return !quoted;
+}
+
+// Whether a cell reads as the number -1 ("-1", "-1.0", "-1e0").
+bool is_minus_one(const std::string& text) {
+  double x = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), x);
+  return !text.empty() && error == std::errc() && end == text.data() + text.size() && x == -1;
 }
 
 // A cell that says "no value" as trackers write it: empty, or nan.
@@ -161,7 +171,7 @@ DetectionsFile parse_detections_file(std::string text, const std::filesystem::pa
     // A failed frame, as trackers write it: no centre (empty or nan), or
     // (-1, -1). The image was read and nothing of this feature was found.
     const std::string u = row.text(u_px), v = row.text(v_px);
-    if ((says_nothing(u) && says_nothing(v)) || (u == "-1" && v == "-1")) {
+    if ((says_nothing(u) && says_nothing(v)) || (is_minus_one(u) && is_minus_one(v))) {
       ++out.failure_rows;
       continue;
     }
@@ -171,12 +181,14 @@ DetectionsFile parse_detections_file(std::string text, const std::filesystem::pa
     const std::optional<double> a = row.optional_number(semi_axis_1_px), b = row.optional_number(semi_axis_2_px),
                                 angle = row.optional_number(angle_deg);
     // Confidence -1 is "none" in several toolkits.
-    const std::optional<double> conf = row.text(confidence) == "-1" ? std::nullopt : row.optional_number(confidence);
+    const std::optional<double> conf = is_minus_one(row.text(confidence)) ? std::nullopt : row.optional_number(confidence);
     if (glint_row) {
       for (const Column c : {semi_axis_1_px, semi_axis_2_px, angle_deg}) {
         if (!row.empty(c)) row.fail(c, "is a pupil's column: leave it empty for a glint");
       }
-      if (!row.empty(confidence) && row.text(confidence) != "-1") row.fail(confidence, "is a pupil's column: leave it empty for a glint");
+      if (!row.empty(confidence) && !is_minus_one(row.text(confidence))) {
+        row.fail(confidence, "is a pupil's column: leave it empty for a glint");
+      }
       Glint g;
       g.centre = centre;
       if (light) {

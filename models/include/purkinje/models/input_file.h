@@ -51,6 +51,9 @@ struct FileCheck {
   bool operator==(const FileCheck&) const = default;
 };
 FileCheck file_check_of(std::string_view contents);
+// The same of a regular file, read in pieces and of any size (outputs of
+// our own are checked, not limited). Throws InputFileError.
+FileCheck file_check_of_file(const std::filesystem::path& file);
 // The CRC as labels write it: eight lower-case hexadecimal digits.
 std::string crc32_text(std::uint32_t crc32);
 

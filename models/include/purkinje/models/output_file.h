@@ -38,10 +38,10 @@ void release_temporary(const std::filesystem::path& temporary);
 // process: what a resumed run may remove.
 bool is_temporary_name(std::string_view name);
 
-// Installs handlers for SIGINT and SIGTERM that remove every registered
-// temporary and exit with 128 + the signal (130, 143), as a shell reports
-// a process the signal ended. For the command line; a library leaves
-// signals to its host.
+// Installs handlers for SIGINT, SIGTERM and SIGHUP (those not ignored
+// already) that remove every registered temporary, then end the process by
+// the signal itself, which a shell reports as 130, 143 and 129. For the
+// command line; a library leaves signals to its host.
 void remove_temporaries_on_signals();
 
 // A point where a test may stop the process, as a kill at that moment

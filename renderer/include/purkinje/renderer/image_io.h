@@ -46,6 +46,10 @@ std::vector<NamedPlane> read_exr(const std::filesystem::path& file);
 // OutputError naming the target file and the reason.
 class FileSet {
  public:
+  FileSet() = default;
+  // Writers may hold the set (temporary_of): it stays where it was made.
+  FileSet(const FileSet&) = delete;
+  FileSet& operator=(const FileSet&) = delete;
   using Writer = std::function<void(const std::filesystem::path& temporary)>;
   void add(std::filesystem::path target, Writer writer);
   // Runs the writers in the order added, then renames in that order: a

@@ -124,8 +124,10 @@ RenderFiles add_render(FileSet& files, const std::filesystem::path& dir, const s
 // throws OutputError naming the file and the reason.
 RenderFiles write_render(const std::filesystem::path& dir, const std::string& stem, const Scene& scene,
                          const RenderResult& result, const RenderOptions& options);
-// The labels document written by write_render.
-std::string render_labels_json(const Scene& scene, const RenderResult& result,
-                               const RenderOptions& options, const RenderFiles& files);
+// The options that decide an image's bytes besides the scene (mode,
+// samples, seed, caches, glint masks, photons, the sensor as rendered), as
+// the labels' "render" section records them: JSON, one line. A resumed
+// set keeps a unit only when its labels record these.
+std::string render_settings_json(const Scene& scene, int camera, const RenderOptions& options);
 
 }  // namespace purkinje::renderer

@@ -50,7 +50,7 @@ struct ScoringSettings {
   double min_pupil_overlap = 0.5;
   // Features the tracker reports at all: a pupil-only tracker's glints
   // are not scored as missed (the table says they were not reported).
-  bool glints = true, pupils = true;
+  bool score_glints = true, score_pupils = true;
 };
 
 enum class Feature { glint, pupil };

@@ -102,5 +102,26 @@ TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
   EXPECT_THROW(read_image_labels("/nonexistent/labels.json"), std::runtime_error);
 }
 
+// Found by fuzzing (tests/fuzz/corpus/labels/deeply_nested.json): the
+// message showed the value with nlohmann's dump(), which recursed once per
+// level and overflowed the stack.
+TEST(ImageLabels, DeeplyNestedValueGivesAMessageNotACrash) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  try {
+    parse_image_labels("{\"labels_format\": " + deep + "}", "deep.json");
+    ADD_FAILURE() << "a nested array is not a format version";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "deep.json: labels_format = [...]: must be an integer in [0, 1000000]");
+  }
+  // Values nested 4 deep, as deep as any the reader reads, are still shown whole.
+  try {
+    parse_image_labels(R"({"labels_format": [[1, {"a": [2]}]]})", "shallow.json");
+    ADD_FAILURE() << "an array is not a format version";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "shallow.json: labels_format = [[1,{\"a\":[2]}]]: must be an integer in [0, 1000000]");
+  }
+}
+
 }  // namespace
 }  // namespace purkinje

@@ -2,7 +2,7 @@
 // exception, ObjError; anything else escaping, a crash or a sanitizer
 // report is a finding. On success, the mesh must be one the renderer can
 // take as it is: a triangle at least, every index in range, every vertex
-// finite (obj_file.h).
+// finite, no triangle of zero area (obj_file.h, mesh.h).
 
 #include <cmath>
 #include <string_view>
@@ -21,6 +21,9 @@ PURKINJE_FUZZ_TARGET(obj) {
   for (const purkinje::Point3& p : mesh.vertices) PURKINJE_FUZZ_CHECK(p.is_finite());
   for (const purkinje::Triangle& t : mesh.triangles) {
     for (const std::uint32_t index : t) PURKINJE_FUZZ_CHECK(index < mesh.vertices.size());
+    const purkinje::Point3& a = mesh.vertices[t[0]];
+    // Zero-area triangles are left out (mesh.h): the renderer takes each one's plane.
+    PURKINJE_FUZZ_CHECK(cross(mesh.vertices[t[1]] - a, mesh.vertices[t[2]] - a).norm() > 0);
   }
   return 0;
 }

@@ -1,8 +1,10 @@
 // Fuzz target: the scene reader (parse_scene). It documents one exception,
 // SceneError; anything else escaping, a crash or a sanitizer report is a
-// finding. On success, the scene must hold what parse_scene promises: an
-// eye and a camera at least, and meshes with finite vertices and indices
-// in range.
+// finding. On success, the scene must hold what parse_scene promises (a
+// validated scene, docs/scene-format.md): an eye and a camera at least,
+// every position finite, cameras with positive finite focal lengths, and
+// meshes with finite vertices, indices in range and no triangle of zero
+// area.
 //
 // Mesh files named by a scene are resolved against a folder this target
 // makes once in the temporary directory, so that a relative name never
@@ -15,6 +17,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -80,14 +83,31 @@ PURKINJE_FUZZ_TARGET(scene) {
   }
   PURKINJE_FUZZ_CHECK(!scene.eyes.empty());
   PURKINJE_FUZZ_CHECK(!scene.cameras.empty());
-  for (const purkinje::Eye& eye : scene.eyes) PURKINJE_FUZZ_CHECK(eye.cornea_center().is_finite());
-  for (const purkinje::Camera& camera : scene.cameras) PURKINJE_FUZZ_CHECK(camera.center().is_finite());
-  for (const purkinje::Illuminator& light : scene.illuminators) PURKINJE_FUZZ_CHECK(light.position.is_finite());
+  for (const purkinje::Eye& eye : scene.eyes) {
+    PURKINJE_FUZZ_CHECK(eye.cornea_center().is_finite() && eye.rotation_center().is_finite());
+    PURKINJE_FUZZ_CHECK(eye.corneal_apex().is_finite() && eye.pupil_center().is_finite());
+  }
+  for (const purkinje::Camera& camera : scene.cameras) {
+    PURKINJE_FUZZ_CHECK(camera.center().is_finite());
+    const purkinje::Intrinsics& k = camera.intrinsics();
+    PURKINJE_FUZZ_CHECK(k.width >= 1 && k.height >= 1);
+    PURKINJE_FUZZ_CHECK(k.fx > 0 && k.fy > 0 && std::isfinite(k.fx) && std::isfinite(k.fy));
+    PURKINJE_FUZZ_CHECK(std::isfinite(k.cx) && std::isfinite(k.cy));
+  }
+  for (const purkinje::Illuminator& light : scene.illuminators) {
+    PURKINJE_FUZZ_CHECK(light.position.is_finite());
+    PURKINJE_FUZZ_CHECK(light.radiant_intensity_w_sr >= 0 && std::isfinite(light.radiant_intensity_w_sr));
+  }
+  if (scene.screen) PURKINJE_FUZZ_CHECK(scene.screen->center().is_finite());
   for (const purkinje::Mesh& mesh : scene.meshes) {
+    PURKINJE_FUZZ_CHECK(mesh.albedo >= 0 && mesh.albedo <= 1);
     PURKINJE_FUZZ_CHECK(!mesh.triangles.empty());
     for (const purkinje::Point3& p : mesh.vertices) PURKINJE_FUZZ_CHECK(p.is_finite());
     for (const purkinje::Triangle& t : mesh.triangles) {
       for (const std::uint32_t index : t) PURKINJE_FUZZ_CHECK(index < mesh.vertices.size());
+      const purkinje::Point3& a = mesh.vertices[t[0]];
+      // Zero-area triangles are left out (mesh.h): the renderer takes each one's plane.
+      PURKINJE_FUZZ_CHECK(cross(mesh.vertices[t[1]] - a, mesh.vertices[t[2]] - a).norm() > 0);
     }
   }
   return 0;

@@ -120,8 +120,16 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
   ImageLabels labels;
   const json& files = r.object(render, "render", "files");
   const json& image = r.member(files, "render.files", "image");
-  if (!image.is_string() || image.get<std::string>().empty()) {
-    r.fail("render.files.image", &image, "must be a file name");
+  // A name in the labels file's folder, as `purkinje render` writes it
+  // (labels.h). A folder part ("../x.png", "/tmp/x.png", "a/x.png", found by
+  // fuzzing) would read an image elsewhere, and two labels files naming
+  // "a/x.png" and "b/x.png" would score under the same name, x.png.
+  const auto plain_file_name = [](const std::string& name) {
+    return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
+           name.find('\0') == std::string::npos;  // the system would cut the name at a NUL
+  };
+  if (!image.is_string() || !plain_file_name(image.get<std::string>())) {
+    r.fail("render.files.image", &image, "must be a file name in the labels file's folder, without a folder part");
   }
   labels.image = file.parent_path() / image.get<std::string>();
   labels.bits = r.integer(r.object(render, "render", "sensor"), "render.sensor", "bits", 1, 16);

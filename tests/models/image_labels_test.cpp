@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
@@ -95,6 +96,15 @@ TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
   j = good;
   j["views"][0]["pupil"]["ellipse"]["semi_axis_1_px"] = -1;
   expect_error(j, "semi_axis_1_px", "positive");
+  // The image is a name in the labels file's folder: a folder part was
+  // read as given (found by fuzzing), reaching images elsewhere.
+  const std::vector<std::string> outside = {"../eye.png", "/tmp/eye.png", "sub/eye.png", "eye.png/", "..", ".",
+                                            std::string("eye\0.png", 8)};
+  for (const std::string& name : outside) {
+    j = good;
+    j["render"]["files"]["image"] = name;
+    expect_error(j, "render.files.image", "a file name in the labels file's folder, without a folder part");
+  }
 
   const std::filesystem::path not_json = std::filesystem::path(::testing::TempDir()) / "image_labels_not.json";
   std::ofstream(not_json) << "{ not json";

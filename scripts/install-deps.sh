@@ -10,6 +10,10 @@ packages=(
   libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libtbb-dev
   libopencv-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # The fuzzers (scripts/fuzz.sh): clang; its libFuzzer, ASan and UBSan
+  # runtimes, which clang only recommends; llvm-symbolizer, for reports
+  # that name functions and lines.
+  clang libclang-rt-14-dev llvm
   gcovr python3
 )
 

@@ -18,6 +18,17 @@ namespace {
 
 using json = nlohmann::json;
 
+// Whether `v` holds arrays or objects nested more than `levels` deep; looks
+// no deeper than that, so it recurses at most `levels` times.
+bool nested_deeper_than(const json& v, int levels) {
+  if (!v.is_structured()) return false;
+  if (levels == 0) return true;
+  for (const json& element : v) {
+    if (nested_deeper_than(element, levels - 1)) return true;
+  }
+  return false;
+}
+
 class Reader {
  public:
   explicit Reader(std::filesystem::path file) : file_(std::move(file)) {}
@@ -25,7 +36,10 @@ class Reader {
   [[noreturn]] void fail(const std::string& key, const json* value, const std::string& rule) const {
     std::string text = file_.string() + ": " + key;
     if (value) {
-      std::string shown = value->dump();
+      // dump() recurses once per level: a value nested 100000 deep (found
+      // by fuzzing) overflowed the stack. No value read here nests more
+      // than 4 deep, so a deeper one is shown by its outer brackets only.
+      std::string shown = !nested_deeper_than(*value, 4) ? value->dump() : value->is_array() ? "[...]" : "{...}";
       if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
       text += " = " + shown;
     }
@@ -126,8 +140,16 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
   ImageLabels labels;
   const json& files = r.object(render, "render", "files");
   const json& image = r.member(files, "render.files", "image");
-  if (!image.is_string() || image.get<std::string>().empty()) {
-    r.fail("render.files.image", &image, "must be a file name");
+  // A name in the labels file's folder, as `purkinje render` writes it
+  // (labels.h). A folder part ("../x.png", "/tmp/x.png", "a/x.png", found by
+  // fuzzing) would read an image elsewhere, and two labels files naming
+  // "a/x.png" and "b/x.png" would score under the same name, x.png.
+  const auto plain_file_name = [](const std::string& name) {
+    return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
+           name.find('\0') == std::string::npos;  // the system would cut the name at a NUL
+  };
+  if (!image.is_string() || !plain_file_name(image.get<std::string>())) {
+    r.fail("render.files.image", &image, "must be a file name in the labels file's folder, without a folder part");
   }
   labels.image = file.parent_path() / image.get<std::string>();
   labels.image_check = r.file_check(files, "render.files", "image");

@@ -32,6 +32,9 @@ using json = nlohmann::json;
 constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr int kMaxResolutionPx = 65536;
 constexpr double kMaxCoordinateMm = 1e6;
+// A triangle whose sides meet at a sine below this has no area to shade,
+// and its orientation is noise: the OBJ reader's rule (obj_file.cpp).
+constexpr double kDegenerateSine = 1e-12;
 
 // Shortest text that reads back as the same double; "inf" and "nan" spelled out.
 std::string format_number(double v) {
@@ -561,7 +564,20 @@ Mesh read_mesh(Object& m, std::size_t index, const std::filesystem::path& folder
     }
     mesh.vertices.push_back(p);
   }
-  mesh.triangles = std::move(obj.triangles);
+  // Placing rounds: a tiny scale (1e-300, found by fuzzing), or a small
+  // mesh far from the origin, can merge a triangle's vertices, and the
+  // renderer takes each triangle's plane. Triangles left without area are
+  // left out, as the OBJ reader leaves out the file's own.
+  for (const Triangle& t : obj.triangles) {
+    const Vector3 a = mesh.vertices[t[1]] - mesh.vertices[t[0]];
+    const Vector3 b = mesh.vertices[t[2]] - mesh.vertices[t[0]];
+    if (cross(a, b).norm() > kDegenerateSine * a.norm() * b.norm()) mesh.triangles.push_back(t);
+  }
+  if (mesh.triangles.empty()) {
+    file.fail("all " + std::to_string(obj.triangles.size()) + " triangles have zero area once placed (scale " +
+              format_number(scale) + ", position_mm " + format_point(position) +
+              "): check scale and position_mm");
+  }
   return mesh;
 }
 

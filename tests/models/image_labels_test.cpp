@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
@@ -95,11 +96,41 @@ TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
   j = good;
   j["views"][0]["pupil"]["ellipse"]["semi_axis_1_px"] = -1;
   expect_error(j, "semi_axis_1_px", "positive");
+  // The image is a name in the labels file's folder: a folder part was
+  // read as given (found by fuzzing), reaching images elsewhere.
+  const std::vector<std::string> outside = {"../eye.png", "/tmp/eye.png", "sub/eye.png", "eye.png/", "..", ".",
+                                            std::string("eye\0.png", 8)};
+  for (const std::string& name : outside) {
+    j = good;
+    j["render"]["files"]["image"] = name;
+    expect_error(j, "render.files.image", "a file name in the labels file's folder, without a folder part");
+  }
 
   const std::filesystem::path not_json = std::filesystem::path(::testing::TempDir()) / "image_labels_not.json";
   std::ofstream(not_json) << "{ not json";
   EXPECT_THROW(read_image_labels(not_json), std::runtime_error);
   EXPECT_THROW(read_image_labels("/nonexistent/labels.json"), std::runtime_error);
+}
+
+// Found by fuzzing (tests/fuzz/corpus/labels/deeply_nested.json): the
+// message showed the value with nlohmann's dump(), which recursed once per
+// level and overflowed the stack.
+TEST(ImageLabels, DeeplyNestedValueGivesAMessageNotACrash) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  try {
+    parse_image_labels("{\"labels_format\": " + deep + "}", "deep.json");
+    ADD_FAILURE() << "a nested array is not a format version";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "deep.json: labels_format = [...]: must be an integer in [0, 1000000]");
+  }
+  // Values nested 4 deep, as deep as any the reader reads, are still shown whole.
+  try {
+    parse_image_labels(R"({"labels_format": [[1, {"a": [2]}]]})", "shallow.json");
+    ADD_FAILURE() << "an array is not a format version";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "shallow.json: labels_format = [[1,{\"a\":[2]}]]: must be an integer in [0, 1000000]");
+  }
 }
 
 }  // namespace

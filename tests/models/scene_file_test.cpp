@@ -720,6 +720,29 @@ std::string mesh_error(const std::string& mesh, const fs::path& folder = kSource
   return "";
 }
 
+// Found by fuzzing: a tiny scale rounded every vertex onto position_mm,
+// and the scene kept triangles of zero area, whose plane the renderer
+// cannot take (mesh.h promises none).
+TEST(SceneFile, MeshTrianglesLeftWithoutAreaOncePlacedAreLeftOutOrRefused) {
+  EXPECT_EQ(mesh_error(R"({ "file": "meshes/square.obj", "albedo": 0.5, "position_mm": [10, 20, 30],
+                            "scale": 1e-300 })"),
+            "scene.json: meshes[0].file = \"meshes/square.obj\": all 2 triangles have zero area once placed "
+            "(scale 1e-300, position_mm [10, 20, 30]): check scale and position_mm");
+  // Far from the origin a sliver rounds flat while a fat triangle keeps
+  // its area: only the sliver is left out. (1e-11 mm across 1 mm: a sine
+  // above 1e-12 in the file; added to y = 5e5 mm, whose doubles are
+  // 5.8e-11 apart, it rounds away.)
+  const fs::path dir = fs::path(::testing::TempDir()) / "mesh_rounding";
+  fs::create_directories(dir);
+  std::ofstream(dir / "two.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1e-11 0\nf 1 2 3\nf 1 2 4\n";
+  const Scene near = parse_scene(scene_with_mesh(R"({ "file": "two.obj", "albedo": 0.5 })"), "scene.json", dir);
+  EXPECT_EQ(near.meshes.at(0).triangles.size(), 2u);
+  const Scene far = parse_scene(
+      scene_with_mesh(R"({ "file": "two.obj", "albedo": 0.5, "position_mm": [0, 500000, 0] })"), "scene.json", dir);
+  ASSERT_EQ(far.meshes.at(0).triangles.size(), 1u);
+  EXPECT_EQ(far.meshes.at(0).triangles[0], (Triangle{0, 1, 2}));
+}
+
 TEST(SceneFile, MeshDefaultsAreNoTurnNoShiftUnitScaleAndANumberedName) {
   const Scene scene = parse_scene(scene_with_mesh(R"({ "file": "meshes/square.obj", "albedo": 0 })"),
                                   "scene.json", kSourceDir / "tests/data");

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Fuzzes the file readers (tests/fuzz): builds the libFuzzer targets with
+# clang++ under ASan+UBSan in build/fuzz, then runs each for SECONDS on a
+# fresh copy of its corpus, one after another. New inputs go to the copy
+# (build/fuzz/corpus/), never to the tree; a finding stops the run with a
+# non-zero exit, its input saved in build/fuzz/findings/.
+#
+#   bash scripts/fuzz.sh [SECONDS [TARGET...]]   (60 s; scene obj labels detections)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"  # cache hits across checkouts
+
+seconds="${1:-60}"
+[ $# -gt 0 ] && shift
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=(scene obj labels detections)
+build=build/fuzz
+
+bash scripts/install-deps.sh  # clang and its libFuzzer runtime among them
+# Tests and benchmarks off: they need no clang build. The fuzzers link the
+# models library only (tests/fuzz/CMakeLists.txt), and nothing else is built.
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ \
+  -DPURKINJE_FUZZ=ON -DPURKINJE_BUILD_TESTS=OFF -DPURKINJE_BUILD_BENCHMARKS=OFF
+cmake --build "$build" --target "${targets[@]/%/_fuzzer}"
+
+mkdir -p "$build/findings"
+for target in "${targets[@]}"; do
+  corpus="$build/corpus/$target"
+  rm -rf "$corpus"
+  mkdir -p "$corpus"
+  cp tests/fuzz/corpus/"$target"/* "$corpus"/
+  echo "fuzz: $target for ${seconds} s"
+  # -max_len: the corpus holds reproducers of 200 KB (deep nesting); left
+  # to itself libFuzzer would mutate inputs that long and run 15 times
+  # slower. Those are replayed whole by fuzz_replay_tests; here they are
+  # cut to 16 KB, four times the largest real scene. -timeout: an input
+  # taking 10 s is a hang (a FIFO once blocked the scene reader forever).
+  if ! "$build/tests/fuzz/${target}_fuzzer" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
+      -print_final_stats=1 -artifact_prefix="$build/findings/$target-" "$corpus"; then
+    echo "fuzz: the $target target failed; its input is in $build/findings/ (replay it with" \
+         "$build/tests/fuzz/${target}_fuzzer FILE; add it to tests/fuzz/corpus/$target/ once the reader is fixed)" >&2
+    exit 1
+  fi
+done
+echo "fuzz: ${targets[*]}: no findings in ${seconds} s each"

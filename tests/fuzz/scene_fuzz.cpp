@@ -1,0 +1,114 @@
+// Fuzz target: the scene reader (parse_scene). It documents one exception,
+// SceneError; anything else escaping, a crash or a sanitizer report is a
+// finding. On success, the scene must hold what parse_scene promises (a
+// validated scene, docs/scene-format.md): an eye and a camera at least,
+// every position finite, cameras with positive finite focal lengths, and
+// meshes with finite vertices, indices in range and no triangle of zero
+// area.
+//
+// Mesh files named by a scene are resolved against a folder this target
+// makes once in the temporary directory, so that a relative name never
+// reaches a file of the tree or of the user. It holds a small valid mesh,
+// square.obj, and a FIFO, fifo.obj: the corpus names both (a FIFO mesh
+// file blocked the reader forever before it refused non-regular files).
+// Absolute names reach the real file system; the reader opens them
+// read-only and refuses anything but a regular file of sane size.
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <system_error>
+
+#include "fuzz_target.h"
+#include "purkinje/models/scene_file.h"
+
+namespace {
+
+// A unit square in the z = 0 plane, two triangles.
+constexpr const char* kSquareObj =
+    "v 0 0 0\n"
+    "v 1 0 0\n"
+    "v 1 1 0\n"
+    "v 0 1 0\n"
+    "f 1 2 3 4\n";
+
+// The folder, made on first use and removed at a normal exit.
+class MeshFolder {
+ public:
+  MeshFolder() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "purkinje-scene-fuzz-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      std::perror("scene fuzz target: mkdtemp");
+      std::abort();
+    }
+    path_ = pattern;
+    std::ofstream(path_ / "square.obj") << kSquareObj;
+    if (::mkfifo((path_ / "fifo.obj").c_str(), 0600) != 0) {
+      std::perror("scene fuzz target: mkfifo");
+      std::abort();
+    }
+  }
+  ~MeshFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  MeshFolder(const MeshFolder&) = delete;
+  MeshFolder& operator=(const MeshFolder&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+const std::filesystem::path& mesh_folder() {
+  static const MeshFolder folder;
+  return folder.path();
+}
+
+}  // namespace
+
+PURKINJE_FUZZ_TARGET(scene) {
+  purkinje::Scene scene;
+  try {
+    scene = purkinje::parse_scene(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json",
+                                  mesh_folder());
+  } catch (const purkinje::SceneError&) {
+    return 0;
+  }
+  PURKINJE_FUZZ_CHECK(!scene.eyes.empty());
+  PURKINJE_FUZZ_CHECK(!scene.cameras.empty());
+  for (const purkinje::Eye& eye : scene.eyes) {
+    PURKINJE_FUZZ_CHECK(eye.cornea_center().is_finite() && eye.rotation_center().is_finite());
+    PURKINJE_FUZZ_CHECK(eye.corneal_apex().is_finite() && eye.pupil_center().is_finite());
+  }
+  for (const purkinje::Camera& camera : scene.cameras) {
+    PURKINJE_FUZZ_CHECK(camera.center().is_finite());
+    const purkinje::Intrinsics& k = camera.intrinsics();
+    PURKINJE_FUZZ_CHECK(k.width >= 1 && k.height >= 1);
+    PURKINJE_FUZZ_CHECK(k.fx > 0 && k.fy > 0 && std::isfinite(k.fx) && std::isfinite(k.fy));
+    PURKINJE_FUZZ_CHECK(std::isfinite(k.cx) && std::isfinite(k.cy));
+  }
+  for (const purkinje::Illuminator& light : scene.illuminators) {
+    PURKINJE_FUZZ_CHECK(light.position.is_finite());
+    PURKINJE_FUZZ_CHECK(light.radiant_intensity_w_sr >= 0 && std::isfinite(light.radiant_intensity_w_sr));
+  }
+  if (scene.screen) PURKINJE_FUZZ_CHECK(scene.screen->center().is_finite());
+  for (const purkinje::Mesh& mesh : scene.meshes) {
+    PURKINJE_FUZZ_CHECK(mesh.albedo >= 0 && mesh.albedo <= 1);
+    PURKINJE_FUZZ_CHECK(!mesh.triangles.empty());
+    for (const purkinje::Point3& p : mesh.vertices) PURKINJE_FUZZ_CHECK(p.is_finite());
+    for (const purkinje::Triangle& t : mesh.triangles) {
+      for (const std::uint32_t index : t) PURKINJE_FUZZ_CHECK(index < mesh.vertices.size());
+      const purkinje::Point3& a = mesh.vertices[t[0]];
+      // Zero-area triangles are left out (mesh.h): the renderer takes each one's plane.
+      PURKINJE_FUZZ_CHECK(cross(mesh.vertices[t[1]] - a, mesh.vertices[t[2]] - a).norm() > 0);
+    }
+  }
+  return 0;
+}

@@ -23,23 +23,27 @@ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=cl
   -DPURKINJE_FUZZ=ON -DPURKINJE_BUILD_TESTS=OFF -DPURKINJE_BUILD_BENCHMARKS=OFF
 cmake --build "$build" --target "${targets[@]/%/_fuzzer}"
 
-mkdir -p "$build/findings"
+mkdir -p "$build/findings" "$build/logs"
 for target in "${targets[@]}"; do
   corpus="$build/corpus/$target"
+  log="$build/logs/$target.log"  # libFuzzer writes a line per new input: megabytes a minute
   rm -rf "$corpus"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/"$target"/* "$corpus"/
-  echo "fuzz: $target for ${seconds} s"
+  echo "fuzz: $target for ${seconds} s (log: $log)"
   # -max_len: the corpus holds reproducers of 200 KB (deep nesting); left
   # to itself libFuzzer would mutate inputs that long and run 15 times
   # slower. Those are replayed whole by fuzz_replay_tests; here they are
   # cut to 16 KB, four times the largest real scene. -timeout: an input
   # taking 10 s is a hang (a FIFO once blocked the scene reader forever).
   if ! "$build/tests/fuzz/${target}_fuzzer" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
-      -print_final_stats=1 -artifact_prefix="$build/findings/$target-" "$corpus"; then
+      -print_final_stats=1 -artifact_prefix="$build/findings/$target-" "$corpus" >"$log" 2>&1; then
+    tail -n 60 "$log" >&2  # the report, and the file the input was saved to
     echo "fuzz: the $target target failed; its input is in $build/findings/ (replay it with" \
          "$build/tests/fuzz/${target}_fuzzer FILE; add it to tests/fuzz/corpus/$target/ once the reader is fixed)" >&2
     exit 1
   fi
+  # Executions, coverage (cov: edges, ft: features) and speed.
+  grep -E '^#[0-9]+[[:space:]]+DONE|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' "$log" || true
 done
 echo "fuzz: ${targets[*]}: no findings in ${seconds} s each"

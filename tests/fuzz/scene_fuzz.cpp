@@ -37,7 +37,8 @@ constexpr const char* kSquareObj =
     "v 0 1 0\n"
     "f 1 2 3 4\n";
 
-// The folder, made on first use and removed at a normal exit.
+// The folder, made on first use and removed at a normal exit (a crash
+// leaves it behind, in the temporary directory).
 class MeshFolder {
  public:
   MeshFolder() {

@@ -449,11 +449,11 @@ int run_render(const RenderRequest& request) {
   purkinje::tools::Progress progress("render", variations.size(), request.quiet);
   for (std::size_t k = 0; k < variations.size(); ++k) {
     options.seed = request.seed + k;  // the noise differs from image to image
-    if (request.resume && unit_complete(dir, stem_of(k), scene, cameras, options)) {
+    const purkinje::Scene varied = purkinje::with_eye_variation(scene, variations[k]);
+    if (request.resume && unit_complete(dir, stem_of(k), varied, cameras, options)) {
       ++resumed;
     } else {
-      const int code = render_and_write(request, purkinje::with_eye_variation(scene, variations[k]), cameras,
-                                        stem_of(k), options, "", false);
+      const int code = render_and_write(request, varied, cameras, stem_of(k), options, "", false);
       if (code != kOk) return code;
     }
     purkinje::stop_point("unit_written");

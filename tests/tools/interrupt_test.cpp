@@ -177,6 +177,21 @@ TEST_F(Interrupted, ResumeKeepsOnlyUnitsOfTheRunItContinues) {
   EXPECT_TRUE(contents(mixed) == *reference_);
 }
 
+// Complete units are kept, not rendered again (the same bytes either way:
+// only the count tells).
+TEST_F(Interrupted, ResumeKeepsTheCompleteUnits) {
+  const fs::path dir = *root_ / "kept";
+  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=unit_written:30:KILL").signal, SIGKILL);
+  const fs::path out = *root_ / "kept_stdout.txt";
+  const std::string command = "'" + kExecutable.string() + "' render '" +
+                              (kSourceDir / "tests/data/tiny_remote.json").string() + "' -o '" + dir.string() +
+                              "' --variations " + std::to_string(kVariations) + " --resume --quiet > '" + out.string() +
+                              "' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  EXPECT_NE(read(out).find("resumed: 30 of 50 variations were complete"), std::string::npos) << read(out);
+  EXPECT_TRUE(contents(dir) == *reference_);
+}
+
 // No index at all (killed before it was first written, or a fresh
 // folder), and an index whose last line a kill cut short: resumed twice.
 TEST_F(Interrupted, ResumeWithoutAnIndexOrAfterACutLine) {

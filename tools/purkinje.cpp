@@ -19,6 +19,7 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <new>
 #include <numbers>
 #include <cmath>
@@ -234,15 +235,22 @@ int render_and_write(const RenderRequest& request, const purkinje::Scene& scene,
   return kOk;
 }
 
+// Variation k's stem among `count`: "<scene>_v<k>", k with at least 4 digits.
+std::string variation_stem(const purkinje::Scene& scene, std::size_t k, std::size_t count) {
+  const std::size_t digits = std::max<std::size_t>(4, std::to_string(count - 1).size());
+  std::string index = std::to_string(k);
+  index.insert(0, digits - index.size(), '0');
+  return (scene.name.empty() ? std::string("scene") : scene.name) + "_v" + index;
+}
+
 // A hidden temporary a killed run left: its process is gone.
 void remove_stale_temporaries(const std::filesystem::path& dir) {
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (!purkinje::is_temporary_name(name)) continue;
-    const std::size_t last = name.rfind('.'), before = name.rfind('.', last - 1);
-    const long pid = std::strtol(name.c_str() + before + 1, nullptr, 10);
-    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) std::filesystem::remove(e.path(), ec);
+    const std::optional<long> pid = purkinje::temporary_owner(e.path().filename().string());
+    if (pid && *pid > 0 && ::kill(static_cast<pid_t>(*pid), 0) != 0 && errno == ESRCH) {
+      std::filesystem::remove(e.path(), ec);
+    }
   }
 }
 
@@ -351,14 +359,11 @@ int run_render(const RenderRequest& request) {
     // Every unit's names, checked now: a folder or FIFO in the way would
     // otherwise stop the run after hours.
     outputs.push_back("variations.csv");
-    const int digits = std::max(4, static_cast<int>(std::to_string(variations.size() - 1).size()));
-    const std::string prefix = (scene.name.empty() ? std::string("scene") : scene.name) + "_v";
     for (std::size_t k = 0; k < variations.size(); ++k) {
-      std::string index = std::to_string(k);
-      index.insert(0, static_cast<std::size_t>(digits) - index.size(), '0');
       for (int camera : cameras) {
         for (const char* extension : {".png", ".exr", ".json"}) {
-          outputs.push_back(file_stem(prefix + index, scene.cameras[camera].name()) + extension);
+          outputs.push_back(file_stem(variation_stem(scene, k, variations.size()), scene.cameras[camera].name()) +
+                            extension);
         }
       }
     }
@@ -381,16 +386,10 @@ int run_render(const RenderRequest& request) {
   // of hundreds would not fit in memory), each all or nothing, the labels
   // last with their images' checks; the index grows a line per finished
   // variation, and is written whole at the end.
-  const int digits = std::max(4, static_cast<int>(std::to_string(variations.size() - 1).size()));
-  const std::string prefix = (scene.name.empty() ? std::string("scene") : scene.name) + "_v";
   const std::filesystem::path dir(request.output_dir);
   const std::filesystem::path index_file = dir / "variations.csv";
   const std::string header = "index,stem,seed,gaze_turn_deg,turn_direction_deg,pupil_radius_mm\n";
-  const auto stem_of = [&](std::size_t k) {
-    std::string index = std::to_string(k);
-    index.insert(0, static_cast<std::size_t>(digits) - index.size(), '0');
-    return prefix + index;
-  };
+  const auto stem_of = [&](std::size_t k) { return variation_stem(scene, k, variations.size()); };
   const auto line_of = [&](std::size_t k) {
     const purkinje::EyeVariation& v = variations[k];
     std::ostringstream line;

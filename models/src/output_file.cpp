@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <charconv>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -94,9 +95,9 @@ void release_temporary(const std::filesystem::path& temporary) {
   }
 }
 
-bool is_temporary_name(std::string_view name) {
+std::optional<long> temporary_owner(std::string_view name) {
   // ".NAME.tmp.PID.N": a hidden name, then ".tmp.", digits, '.', digits.
-  if (name.size() < 2 || name.front() != '.') return false;
+  if (name.size() < 2 || name.front() != '.') return std::nullopt;
   const auto digits_from = [&](std::size_t at, std::size_t end) {
     if (at >= end) return false;
     for (std::size_t i = at; i < end; ++i) {
@@ -105,10 +106,16 @@ bool is_temporary_name(std::string_view name) {
     return true;
   };
   const std::size_t last_dot = name.rfind('.');
-  if (last_dot == std::string_view::npos || last_dot == 0 || !digits_from(last_dot + 1, name.size())) return false;
+  if (last_dot == std::string_view::npos || last_dot == 0 || !digits_from(last_dot + 1, name.size())) {
+    return std::nullopt;
+  }
   const std::size_t pid_dot = name.rfind('.', last_dot - 1);
-  if (pid_dot == std::string_view::npos || !digits_from(pid_dot + 1, last_dot)) return false;
-  return pid_dot >= 5 && name.substr(pid_dot - 4, 4) == ".tmp" && pid_dot - 4 > 1;
+  if (pid_dot == std::string_view::npos || !digits_from(pid_dot + 1, last_dot)) return std::nullopt;
+  if (!(pid_dot >= 5 && name.substr(pid_dot - 4, 4) == ".tmp" && pid_dot - 4 > 1)) return std::nullopt;
+  long pid = 0;
+  const auto [end, error] = std::from_chars(name.data() + pid_dot + 1, name.data() + last_dot, pid);
+  if (error != std::errc() || end != name.data() + last_dot) return std::nullopt;  // beyond any process id
+  return pid;
 }
 
 void remove_temporaries_on_signals() {

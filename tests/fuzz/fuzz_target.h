@@ -28,3 +28,17 @@
       std::abort();                                                                               \
     }                                                                                             \
   } while (false)
+
+// What mesh.h promises of a mesh read (an OBJ file, or a scene's mesh once
+// placed): triangles, finite vertices, indices in range, no zero area
+// (the renderer takes each triangle's plane).
+template <class Mesh>
+void check_mesh_promises(const Mesh& mesh) {
+  PURKINJE_FUZZ_CHECK(!mesh.triangles.empty());
+  for (const auto& p : mesh.vertices) PURKINJE_FUZZ_CHECK(p.is_finite());
+  for (const auto& t : mesh.triangles) {
+    for (const std::uint32_t index : t) PURKINJE_FUZZ_CHECK(index < mesh.vertices.size());
+    const auto& a = mesh.vertices[t[0]];
+    PURKINJE_FUZZ_CHECK(cross(mesh.vertices[t[1]] - a, mesh.vertices[t[2]] - a).norm() > 0);
+  }
+}

@@ -102,14 +102,7 @@ PURKINJE_FUZZ_TARGET(scene) {
   if (scene.screen) PURKINJE_FUZZ_CHECK(scene.screen->center().is_finite());
   for (const purkinje::Mesh& mesh : scene.meshes) {
     PURKINJE_FUZZ_CHECK(mesh.albedo >= 0 && mesh.albedo <= 1);
-    PURKINJE_FUZZ_CHECK(!mesh.triangles.empty());
-    for (const purkinje::Point3& p : mesh.vertices) PURKINJE_FUZZ_CHECK(p.is_finite());
-    for (const purkinje::Triangle& t : mesh.triangles) {
-      for (const std::uint32_t index : t) PURKINJE_FUZZ_CHECK(index < mesh.vertices.size());
-      const purkinje::Point3& a = mesh.vertices[t[0]];
-      // Zero-area triangles are left out (mesh.h): the renderer takes each one's plane.
-      PURKINJE_FUZZ_CHECK(cross(mesh.vertices[t[1]] - a, mesh.vertices[t[2]] - a).norm() > 0);
-    }
+    check_mesh_promises(mesh);
   }
   return 0;
 }

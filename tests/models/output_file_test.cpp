@@ -22,6 +22,7 @@ TEST(Temporaries, AreHiddenSiblingsNamedAfterTheTargetAndThisProcess) {
   const std::string name = t.filename().string();
   EXPECT_EQ(name.rfind(".a.b.png.tmp." + std::to_string(::getpid()) + ".", 0), 0u) << name;
   EXPECT_TRUE(is_temporary_name(name));
+  EXPECT_EQ(temporary_owner(name), ::getpid());
   EXPECT_TRUE(std::filesystem::is_regular_file(t));
   release_temporary(t);
   std::filesystem::remove_all(dir);
@@ -33,6 +34,10 @@ TEST(Temporaries, OnlyTheirNamesAreTakenForThem) {
   for (const char* other : {"x.png.tmp.123.0", ".x.png.tmp.123.", ".x.png.tmp..0", ".x.png.tmp.12a.0",
                             ".tmp.1.2", ".x.png.tmp-123-0", ".x.png", "score.json", ".x.png.tmp.123"}) {
     EXPECT_FALSE(is_temporary_name(other)) << other;
+  }
+  EXPECT_EQ(temporary_owner(".x.png.tmp.123.0"), 123);
+  EXPECT_FALSE(temporary_owner(".x.png.tmp.99999999999999999999999.0")) << "no process has that id";
+  {
   }
 }
 

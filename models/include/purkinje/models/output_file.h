@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -34,9 +35,11 @@ std::filesystem::path create_temporary(const std::filesystem::path& target);
 // The temporary was renamed into place or removed: no longer the signal
 // handler's to remove.
 void release_temporary(const std::filesystem::path& temporary);
-// Whether `name` (a file name) is one of create_temporary()'s, of any
-// process: what a resumed run may remove.
-bool is_temporary_name(std::string_view name);
+// The process that made `name` (a file name) when it is one of
+// create_temporary()'s, of any process: what a resumed run may remove
+// once that process is gone.
+std::optional<long> temporary_owner(std::string_view name);
+inline bool is_temporary_name(std::string_view name) { return temporary_owner(name).has_value(); }
 
 // Installs handlers for SIGINT, SIGTERM and SIGHUP (those not ignored
 // already) that remove every registered temporary, then end the process by

@@ -136,7 +136,7 @@ UnitVector3 Camera::back_project(const Pixel& pixel) const {
   const double xd = (pixel.u - intrinsics_.cx) / intrinsics_.fx;
   const double yd = (pixel.v - intrinsics_.cy) / intrinsics_.fy;
   double x = xd, y = yd;
-  undistort(xd, yd, x, y);
+  if (!distortion_.is_zero()) undistort(xd, yd, x, y);  // a call per camera ray saved
   const Vector3 ray_in_camera{x, y, 1};
   return world_from_camera_ * UnitVector3::from_normalized_unchecked(ray_in_camera /
                                                                      ray_in_camera.norm());

@@ -5,17 +5,9 @@
 
 namespace purkinje {
 
-std::optional<UnitVector3> UnitVector3::try_normalize(const Vector3& v) {
-  const double n = v.norm();
-  if (!(n > 0.0) || !std::isfinite(n)) return std::nullopt;
-  return UnitVector3(v / n);
-}
-
-UnitVector3 UnitVector3::normalize(const Vector3& v) {
-  if (auto u = try_normalize(v)) return *u;
+void UnitVector3::throw_not_normalizable(const Vector3& v) {
   std::ostringstream msg;
-  msg << "cannot normalize vector (" << v.x << ", " << v.y << ", " << v.z << ") of norm "
-      << v.norm();
+  msg << "cannot normalize vector (" << v.x << ", " << v.y << ", " << v.z << ") of norm " << v.norm();
   throw std::invalid_argument(msg.str());
 }
 

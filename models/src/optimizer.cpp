@@ -103,13 +103,14 @@ Summary solve_tiny(int num_residuals, std::span<double> x, const ResidualFunctio
   const int num_parameters = static_cast<int>(x.size());
 
   // Fixed sizes live on the stack. Dynamic sizes would allocate on every
-  // call, so they reuse one solver per thread, unless a residual function
-  // itself calls solve (then the nested call gets its own).
+  // call, so they reuse one solver per thread (one per size pattern),
+  // unless a residual function itself calls solve (then the nested call
+  // gets its own).
   static thread_local bool shared_solver_busy = false;
   std::optional<Solver> own_solver;
   Solver* solver_pointer = nullptr;
   bool uses_shared_solver = false;
-  if constexpr (P == Eigen::Dynamic) {
+  if constexpr (R == Eigen::Dynamic || P == Eigen::Dynamic) {
     static thread_local Solver shared_solver;
     if (!shared_solver_busy) {
       solver_pointer = &shared_solver;
@@ -277,6 +278,9 @@ Summary solve(int num_residuals, std::span<double> x, const ResidualFunction& re
       default: break;
     }
   }
+  // One frame's cornea centre (and the like): a 3 x 3 normal matrix on
+  // the stack, not a blocked product and a dynamic factorization.
+  if (num_parameters == 3) return solve_tiny<Eigen::Dynamic, 3>(num_residuals, x, residuals, options);
   return solve_tiny<Eigen::Dynamic, Eigen::Dynamic>(num_residuals, x, residuals, options);
 }
 

@@ -660,14 +660,19 @@ void add_lids(SurfaceList& list, int index, const Scene& scene) {
   add(list, Surface::skin, index, world_from_head, std::move(face));
 }
 
-void check_ray(const Point3& origin, const Vector3& direction, double t_min, double t_max) {
-  if (!origin.is_finite() || !direction.is_finite() || !(t_min >= 0) || std::isnan(t_max)) {
-    std::ostringstream msg;
-    msg << "RayTracer: invalid ray: origin (" << origin.x << ", " << origin.y << ", " << origin.z
-        << "), direction (" << direction.x << ", " << direction.y << ", " << direction.z
-        << "), t_min " << t_min << ", t_max " << t_max
-        << ": coordinates must be finite and 0 <= t_min";
-    throw std::invalid_argument(msg.str());
+[[noreturn]] [[gnu::cold]] [[gnu::noinline]] void throw_invalid_ray(const Point3& origin, const Vector3& direction,
+                                                                double t_min, double t_max) {
+  std::ostringstream msg;
+  msg << "RayTracer: invalid ray: origin (" << origin.x << ", " << origin.y << ", " << origin.z << "), direction ("
+      << direction.x << ", " << direction.y << ", " << direction.z << "), t_min " << t_min << ", t_max " << t_max
+      << ": coordinates must be finite and 0 <= t_min";
+  throw std::invalid_argument(msg.str());
+}
+
+// On every ray's path: the check inline, the message out of line.
+inline void check_ray(const Point3& origin, const Vector3& direction, double t_min, double t_max) {
+  if (!origin.is_finite() || !direction.is_finite() || !(t_min >= 0) || std::isnan(t_max)) [[unlikely]] {
+    throw_invalid_ray(origin, direction, t_min, t_max);
   }
 }
 

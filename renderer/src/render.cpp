@@ -870,16 +870,15 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   };
 
   // A lone sample through the pixel's centre, exact where the radiance is
-  // linear across the pixel; its first hit may be given (`hit`, traced
-  // with its row's packet). Nothing to tally: the first pass of most
-  // images is this for every pixel.
-  const auto render_centre = [&](int x, int y, const Hit* hit) {
+  // linear across the pixel, along `ray` (the centre's camera ray) whose
+  // first hit was traced with its row's packet. Nothing to tally: the
+  // first pass of most images is this for every pixel.
+  const auto render_centre = [&](int x, int y, const Ray& ray, const Hit& hit) {
     const Pixel image_position{double(x), double(y)};
-    const Ray ray = camera_ray(image_position);
     Contribution sum;
     PrimaryRecord record;
     const std::uint64_t path = (static_cast<std::uint64_t>(y) * width + x) * edge_spp;
-    integrator->sample(ray, hit ? *hit : tracer.intersect(ray), image_position, path, sum, record, 1.0);
+    integrator->sample(ray, hit, image_position, path, sum, record, 1.0);
     std::array<int, kClasses> counts{};
     counts[static_cast<int>(record.pixel_class)] = 1;
     store_pixel(x, y, sum, 1, ray.direction, record, counts, record.through_cornea ? 1 : 0);
@@ -970,7 +969,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       const int count = std::min(kPacket, traced.x1 - x0);
       for (int i = 0; i < count; ++i) rays[i] = camera_ray({double(x0 + i), double(y)});
       tracer.intersect(std::span<const Ray>(rays.data(), count), std::span<Hit>(hits.data(), count));
-      for (int i = 0; i < count; ++i) render_centre(x0 + i, y, &hits[i]);
+      for (int i = 0; i < count; ++i) render_centre(x0 + i, y, rays[i], hits[i]);
     }
   });
   if (edge_spp > spp) {

@@ -227,8 +227,14 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     sd[2 * i + 1] = glints[i].sd_v_px > 0 ? glints[i].sd_v_px : s.pixel_noise_px;
     own_noise = own_noise || glints[i].sd_u_px > 0 || glints[i].sd_v_px > 0;
   }
-  const std::string noise = own_noise ? "the glints' own noise (" + number(s.pixel_noise_px) + " px where none is given)"
-                                      : number(s.pixel_noise_px) + " px of glint noise";
+  const auto noise = [&] {
+    return own_noise ? "the glints' own noise (" + number(s.pixel_noise_px) + " px where none is given)"
+                     : number(s.pixel_noise_px) + " px of glint noise";
+  };
+  // The last point whose Jacobian was evaluated, with its residuals and
+  // Jacobian: the solver ends at such a point, whose covariance needs them
+  // (a fifth of a one-frame fit's glints saved).
+  std::vector<double> last_x, last_r, last_jacobian;
   const optimizer::ResidualFunction residuals = [&](const double* x, double* r, double* jacobian) {
     const double radius = s.fit_radius ? x[n - 1] : s.cornea_radius_mm;
     if (jacobian != nullptr) std::fill_n(jacobian, static_cast<std::size_t>(m) * n, 0.0);
@@ -254,6 +260,11 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     if (prior) {
       r[m - 1] = (radius - s.cornea_radius_mm) / s.radius_prior_sd_mm;
       if (jacobian != nullptr) jacobian[static_cast<std::size_t>(m - 1) * n + n - 1] = 1 / s.radius_prior_sd_mm;
+    }
+    if (jacobian != nullptr) {
+      last_x.assign(x, x + n);
+      last_r.assign(r, r + m);
+      last_jacobian.assign(jacobian, jacobian + static_cast<std::size_t>(m) * n);
     }
     return true;
   };
@@ -285,7 +296,10 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   out.converged = summary.converged;
 
   std::vector<double> r(m), jacobian(static_cast<std::size_t>(m) * n);
-  if (!residuals(x.data(), r.data(), jacobian.data())) {
+  if (last_x == x) {
+    r = last_r;
+    jacobian = last_jacobian;
+  } else if (!residuals(x.data(), r.data(), jacobian.data())) {
     out.converged = false;
     out.warnings.push_back("some light has no glint on the cornea at the estimate: the fit failed (" +
                            summary.message + ")");
@@ -302,7 +316,8 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
 
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
       jacobian.data(), m, n);
-  const Eigen::MatrixXd normal = j.transpose() * j;
+  // Coefficient by coefficient: a few columns (3 per frame) need no blocked product.
+  const Eigen::MatrixXd normal = j.transpose().lazyProduct(j);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
   const double lo = eigen.eigenvalues()(0), hi = eigen.eigenvalues()(n - 1);
   out.condition = lo > 0 ? hi / lo : INFINITY;
@@ -323,12 +338,12 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     if (sd > s.max_sd_mm) {
       out.warnings.push_back("frame " + std::to_string(f) + "'s cornea centre is weakly determined: " +
                              number(sd) + " mm standard deviation along " +
-                             direction(block.eigenvectors().col(2)) + " at " + noise);
+                             direction(block.eigenvectors().col(2)) + " at " + noise());
     }
   }
   if (s.fit_radius && std::sqrt(covariance(n - 1, n - 1)) > s.max_sd_mm) {
     out.warnings.push_back("the cornea's radius is weakly determined: " +
-                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " + noise);
+                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " + noise());
   }
   if (!out.converged) out.warnings.push_back("the fit stopped before converging: " + summary.message);
   return out;

@@ -88,8 +88,22 @@ class UnitVector3 {
 
  private:
   constexpr explicit UnitVector3(const Vector3& v) : v_(v) {}
+  // Out of line and cold: the normalizers sit on every ray's path.
+  [[noreturn]] static void throw_not_normalizable(const Vector3& v);
   Vector3 v_;
 };
+
+inline std::optional<UnitVector3> UnitVector3::try_normalize(const Vector3& v) {
+  const double n = v.norm();
+  if (!(n > 0.0) || !std::isfinite(n)) return std::nullopt;
+  return UnitVector3(v / n);
+}
+
+inline UnitVector3 UnitVector3::normalize(const Vector3& v) {
+  const double n = v.norm();
+  if (!(n > 0.0) || !std::isfinite(n)) throw_not_normalizable(v);
+  return UnitVector3(v / n);
+}
 
 constexpr Vector3 operator*(double s, const UnitVector3& u) { return u.vector() * s; }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes the file readers (tests/fuzz): builds the libFuzzer targets with
 # clang++ under ASan+UBSan in build/fuzz, then runs each for SECONDS on a
-# fresh copy of its corpus, one after another. New inputs go to the copy
+# fresh copy of its corpus, one per core at a time. New inputs go to the copy
 # (build/fuzz/corpus/), never to the tree; a finding stops the run with a
 # non-zero exit, its input saved in build/fuzz/findings/.
 #
@@ -24,9 +24,11 @@ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=cl
 cmake --build "$build" --target "${targets[@]/%/_fuzzer}"
 
 mkdir -p "$build/findings" "$build/logs"
-for target in "${targets[@]}"; do
-  corpus="$build/corpus/$target"
-  log="$build/logs/$target.log"  # libFuzzer writes a line per new input: megabytes a minute
+# One target per core at a time: each fuzzer is one process on one core.
+fuzz_one() {
+  local target="$1"
+  local corpus="$build/corpus/$target"
+  local log="$build/logs/$target.log"  # libFuzzer writes a line per new input: megabytes a minute
   rm -rf "$corpus"
   mkdir -p "$corpus"
   cp tests/fuzz/corpus/"$target"/* "$corpus"/
@@ -41,9 +43,21 @@ for target in "${targets[@]}"; do
     tail -n 60 "$log" >&2  # the report, and the file the input was saved to
     echo "fuzz: the $target target failed; its input is in $build/findings/ (replay it with" \
          "$build/tests/fuzz/${target}_fuzzer FILE; add it to tests/fuzz/corpus/$target/ once the reader is fixed)" >&2
-    exit 1
+    return 1
   fi
   # Executions, coverage (cov: edges, ft: features) and speed.
-  grep -E '^#[0-9]+[[:space:]]+DONE|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' "$log" || true
+  grep -E '^#[0-9]+[[:space:]]+DONE|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' "$log" |
+    sed "s/^/$target: /" || true
+}
+failed=0
+cores="$(nproc)"
+for ((first = 0; first < ${#targets[@]}; first += cores)); do
+  pids=()
+  for target in "${targets[@]:first:cores}"; do
+    fuzz_one "$target" &
+    pids+=($!)
+  done
+  for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
 done
+[ "$failed" -eq 0 ] || exit 1
 echo "fuzz: ${targets[*]}: no findings in ${seconds} s each"

@@ -233,7 +233,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   };
   // The last point whose Jacobian was evaluated, with its residuals and
   // Jacobian: the solver ends at such a point, whose covariance needs them
-  // (a fifth of a one-frame fit's glints saved).
+  // (one of a one-frame fit's five or six Jacobian evaluations saved).
   std::vector<double> last_x, last_r, last_jacobian;
   const optimizer::ResidualFunction residuals = [&](const double* x, double* r, double* jacobian) {
     const double radius = s.fit_radius ? x[n - 1] : s.cornea_radius_mm;

@@ -21,18 +21,18 @@
 #include "commands.h"
 #include "output_checks.h"
 #include "progress.h"
-#include "tracker_optics.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/render.h"
+#include "purkinje/studies/simulation.h"
+#include "purkinje/studies/tracker.h"
 #include "purkinje/trackers/cornea.h"
 #include "purkinje/trackers/gaze.h"
 #include "purkinje/trackers/glints.h"
 #include "purkinje/trackers/image.h"
 #include "purkinje/trackers/image_file.h"
 #include "purkinje/trackers/pupil.h"
-#include "purkinje/trackers/simulation.h"
 
 namespace purkinje::tools {
 namespace {
@@ -64,8 +64,7 @@ std::string format(double value, int digits = 4) {
 // Renders the eye fixating `target` from rotation centre `center` and
 // reads the image with the detectors.
 Frame render_frame(const Scene& rig, const Point3& center, int position, const ScreenPoint& target,
-                   const std::vector<std::optional<Pixel>>& layout, const trackers::BlobGlintSettings& glint_settings,
-                   std::uint64_t seed) {
+                   const studies::Tracker& tracker, std::uint64_t seed) {
   Frame f;
   f.position = position;
   f.target = target;
@@ -80,9 +79,9 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
   const renderer::RenderResult result = renderer::render(scene, 0, options);
   const trackers::GreyView image = trackers::grey_view(std::span<const std::uint16_t>(result.sensor.values), result.sensor.width,
                                              result.sensor.height, result.sensor.bits);
-  std::vector<trackers::Glint> glints = trackers::BlobGlintDetector(glint_settings).detect(image);
-  trackers::identify_glints(glints, layout);
-  const std::optional<trackers::PupilDetection> pupil = trackers::StarburstPupilDetector().detect(image, glints);
+  const trackers::Detections found = tracker.track(image);
+  const std::vector<trackers::Glint>& glints = found.glints;
+  const trackers::PupilFound* pupil = found.pupils.empty() ? nullptr : &found.pupils.front();
   const EyeInCameraTruth& view = result.truth.views.front();
   for (const trackers::Glint& g : glints) {
     if (g.illuminator < 0) continue;
@@ -102,12 +101,12 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
   }
   if (pupil && view.pupil.ellipse_valid) {
     const Pixel& label = view.pupil.ellipse.center;
-    if (std::hypot(pupil->ellipse.center.u - label.u, pupil->ellipse.center.v - label.v) <= 5) {
-      f.pupil_errors_px = {pupil->ellipse.center.u - label.u, pupil->ellipse.center.v - label.v};
+    if (std::hypot(pupil->centre.u - label.u, pupil->centre.v - label.v) <= 5) {
+      f.pupil_errors_px = {pupil->centre.u - label.u, pupil->centre.v - label.v};
     }
   }
   if (pupil && f.glints_told >= 2) {
-    f.found = trackers::GazeFeatures{glints, pupil->ellipse.center, trackers::ellipse_outline(pupil->ellipse)};
+    f.found = trackers::GazeFeatures{glints, pupil->centre, trackers::ellipse_outline(*pupil->ellipse)};
   }
   return f;
 }
@@ -127,7 +126,7 @@ struct Tally {
   int within_3sd_x = 0, within_3sd_y = 0, with_sd = 0;
 };
 
-void add_errors(trackers::Results& r, const std::string& prefix, const Tally& t) {
+void add_errors(studies::Results& r, const std::string& prefix, const Tally& t) {
   std::vector<double> e = t.errors_deg;
   std::sort(e.begin(), e.end());
   r.add(prefix + "frames", static_cast<double>(e.size()));
@@ -198,8 +197,6 @@ int run_calibrate(const CalibrateRequest& request) {
       request.tracker_cornea ? (*request.tracker_cornea)[1] : scene_eye.anterior_cornea.asphericity;
   nominal.refractive_index = scene_eye.posterior_cornea ? 1.3375 : scene_eye.aqueous_index;
   nominal.pupil_depth_mm = scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm;
-  const std::vector<std::optional<Pixel>> layout =
-      trackers::nominal_glint_layout(camera, rig.illuminators, rig.eyes.front());
 
   std::vector<std::pair<std::string, Point3>> positions{{"home", home}};
   for (const std::array<double, 3>& m : request.head_moves) {
@@ -210,19 +207,20 @@ int run_calibrate(const CalibrateRequest& request) {
   double spot_sigma_px = 0;
   std::uint64_t seed = request.seed;
   try {
-    // The tracker knows its optics: the spot's width and the sensor's noise.
-    const trackers::BlobGlintSettings glint_settings = glint_settings_for(camera, rig.illuminators, nominal_cornea);
-    spot_sigma_px = glint_settings.spot_sigma_px;
+    // The tracker knows its rig: the camera's optics (the spot's width, the
+    // sensor's noise) and where the lights put glints on the nominal eye.
+    const studies::Tracker tracker(camera, rig.illuminators, rig.eyes.front());
+    spot_sigma_px = tracker.glint_settings().spot_sigma_px;
     Progress progress("calibrate: frames", static_cast<std::size_t>(
         request.calibration_grid * request.calibration_grid + positions.size() * request.grid * request.grid +
         request.noise_frames), request.quiet);
     for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
-      calibration.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
+      calibration.push_back(render_frame(rig, home, 0, t, tracker, seed++));
       progress.step();
     }
     for (std::size_t p = 0; p < positions.size(); ++p) {
       for (const ScreenPoint& t : screen.grid(request.grid, request.grid)) {
-        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, layout, glint_settings, seed++));
+        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, tracker, seed++));
         progress.step();
       }
     }
@@ -232,7 +230,7 @@ int run_calibrate(const CalibrateRequest& request) {
     std::uniform_real_distribution<double> along(0, 1);
     for (int i = 0; i < request.noise_frames; ++i) {
       const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
-      noise_frames.push_back(render_frame(rig, home, 0, t, layout, glint_settings, seed++));
+      noise_frames.push_back(render_frame(rig, home, 0, t, tracker, seed++));
       progress.step();
     }
   } catch (const std::exception& error) {
@@ -320,10 +318,10 @@ int run_calibrate(const CalibrateRequest& request) {
     return kBadInput;
   }
 
-  std::vector<trackers::SimulationRun> runs;
+  std::vector<studies::SimulationRun> runs;
   {
-    trackers::SimulationRun run{"calibration", "model-based", {}, std::nullopt};
-    trackers::Results& r = run.results;
+    studies::SimulationRun run{"calibration", "model-based", {}, std::nullopt};
+    studies::Results& r = run.results;
     r.add("frames_used", static_cast<double>(features.size()));
     r.add("frames_rendered", static_cast<double>(calibration.size()));
     r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
@@ -376,7 +374,7 @@ int run_calibrate(const CalibrateRequest& request) {
     runs.push_back(std::move(run));
   }
   {
-    trackers::SimulationRun run{"calibration", "polynomial", {}, std::nullopt};
+    studies::SimulationRun run{"calibration", "polynomial", {}, std::nullopt};
     run.results.add("frames_used", static_cast<double>(features.size()));
     run.results.add("rms_residual_at_targets", polynomial->rms_residual_mm(), "mm");
     runs.push_back(std::move(run));
@@ -480,7 +478,7 @@ int run_calibrate(const CalibrateRequest& request) {
         panel.estimates[0].push_back(by_model);
         panel.estimates[1].push_back(by_polynomial);
       }
-      trackers::SimulationRun m{name, "model-based", {}, std::nullopt};
+      studies::SimulationRun m{name, "model-based", {}, std::nullopt};
       add_errors(m.results, "gaze_", model_tally);
       if (!depth.empty()) {
         double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
@@ -497,7 +495,7 @@ int run_calibrate(const CalibrateRequest& request) {
         m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
       }
       runs.push_back(std::move(m));
-      trackers::SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};
+      studies::SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};
       add_errors(by_polynomial_run.results, "gaze_", polynomial_tally);
       runs.push_back(std::move(by_polynomial_run));
       panels.push_back(std::move(panel));
@@ -508,13 +506,13 @@ int run_calibrate(const CalibrateRequest& request) {
   }
 
   const fs::path dir(request.output_dir);
-  const std::string text = trackers::simulation_text(runs);
+  const std::string text = studies::simulation_text(runs);
   try {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
     write_file_atomically(dir / "calibration.txt", text);
-    write_file_atomically(dir / "calibration.json", trackers::simulation_json(runs));
+    write_file_atomically(dir / "calibration.json", studies::simulation_json(runs));
     write_file_atomically(dir / "frames.csv", csv.str());
     trackers::write_gaze_map(dir / "gaze_error.png", screen, {"model-based", "polynomial"}, panels);
   } catch (const std::exception& error) {

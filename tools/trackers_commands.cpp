@@ -18,16 +18,14 @@
 #include "commands.h"
 #include "output_checks.h"
 #include "progress.h"
-#include "tracker_optics.h"
 #include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/spelling.h"
+#include "purkinje/studies/tracker.h"
 #include "purkinje/trackers/detections_file.h"
-#include "purkinje/trackers/glints.h"
 #include "purkinje/trackers/image_file.h"
-#include "purkinje/trackers/pupil.h"
 #include "purkinje/trackers/scoring.h"
 
 namespace purkinje::tools {
@@ -220,27 +218,21 @@ int run_track(const TrackRequest& request) {
     std::cerr << "purkinje track: error: " << error.what() << "\n";
     return kBadInput;
   }
-  const trackers::BlobGlintDetector default_glint_detector;
-  const trackers::StarburstPupilDetector pupil_detector;
   trackers::ScoringSettings settings;
   settings.match_radius_px = request.match_radius_px;
   settings.min_pupil_overlap = request.min_pupil_overlap;
   trackers::Scorer scorer(settings);
   std::map<std::string, trackers::Detections> detections;
-  // Per camera of the rig: which light makes which glint (where its lights
-  // would put them on the rig's nominal eye), and a glint detector told
-  // the camera's optics.
-  struct CameraTracker {
-    std::vector<std::optional<Pixel>> layout;
-    trackers::BlobGlintDetector glint_detector;
-  };
-  std::map<int, CameraTracker> trackers_by_camera;
+  // Without a rig, the detectors' defaults; with one, a tracker per camera
+  // that knows its optics and which light makes which glint.
+  const studies::Tracker default_tracker;
+  std::map<int, studies::Tracker> trackers_by_camera;
   double seconds = 0;
   try {
     Progress progress("track", images.size(), request.quiet);
     for (const LabelledImage& image : images) {
       const trackers::GreyImage pixels = read_image(image);
-      const CameraTracker* tracker = nullptr;
+      const studies::Tracker* tracker = &default_tracker;
       if (rig && !image.labels.views.empty()) {
         const int camera = image.labels.views.front().camera;
         if (camera >= static_cast<int>(rig->cameras.size()) || rig->eyes.empty() ||
@@ -248,25 +240,11 @@ int run_track(const TrackRequest& request) {
           throw std::runtime_error(image.labels.image.string() + ": its labels' camera " + std::to_string(camera) +
                                    " and lights do not match " + request.scene_file);
         }
-        auto it = trackers_by_camera.find(camera);
-        if (it == trackers_by_camera.end()) {
-          const Camera& c = rig->cameras[camera];
-          const Eye& eye = rig->eyes.front();
-          it = trackers_by_camera
-                   .emplace(camera, CameraTracker{trackers::nominal_glint_layout(c, rig->illuminators, eye),
-                                                  trackers::BlobGlintDetector(glint_settings_for(
-                                                      c, rig->illuminators, eye.cornea_center()))})
-                   .first;
-        }
-        tracker = &it->second;
+        tracker = &trackers_by_camera.try_emplace(camera, rig->cameras[camera], rig->illuminators, rig->eyes.front())
+                       .first->second;
       }
       const auto start = std::chrono::steady_clock::now();
-      trackers::Detections found;
-      found.glints = (tracker ? tracker->glint_detector : default_glint_detector).detect(pixels.view());
-      if (tracker) trackers::identify_glints(found.glints, tracker->layout);
-      if (const auto pupil = pupil_detector.detect(pixels.view(), found.glints)) {
-        found.pupils.push_back({pupil->ellipse.center, pupil->ellipse, pupil->confidence});
-      }
+      trackers::Detections found = tracker->track(pixels.view());
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       scorer.add(image.name, image.labels.views, found);
       detections[image.name] = std::move(found);

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "purkinje/renderer/radiometry.h"
-#include "require.h"
+#include "purkinje/models/check.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -27,8 +27,8 @@ constexpr double kPi = 3.14159265358979323846;
 // incidence and 9e-7 at 89 degrees.
 constexpr double kRelativeStep = 1e-4;
 
-using detail::require_non_negative;
-using detail::require_positive;
+using check::require_non_negative;
+using check::require_positive;
 
 // A perturbed reflection is usable for differencing whenever its geometry
 // exists: a neighbour of a glint near the limbus may fall just off the cap,

@@ -1,6 +1,6 @@
 #include "purkinje/renderer/sensor_model.h"
 
-#include "require.h"
+#include "purkinje/models/check.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -20,9 +20,9 @@
 namespace purkinje::renderer {
 namespace {
 
-using detail::fail;
-using detail::require_non_negative;
-using detail::require_positive;
+using check::fail;
+using check::require_non_negative;
+using check::require_positive;
 
 constexpr double kPlanck = 6.62607015e-34;    // J s (exact, SI 2019)
 constexpr double kLightSpeed = 299792458.0;   // m / s (exact)
@@ -590,35 +590,6 @@ double electrons_per_watt(const Sensor& sensor, double wavelength_nm) {
   return sensor.exposure_s * sensor.quantum_efficiency * photons_per_joule(wavelength_nm);
 }
 
-double aperture_diameter_mm(const Camera& camera) {
-  require_positive("sensor.f_number", camera.sensor().f_number);
-  return camera.focal_length_mm() / camera.sensor().f_number;
-}
-
-PointSpread point_spread(const Camera& camera, double depth_mm) {
-  const Sensor& sensor = camera.sensor();
-  require_non_negative("sensor.psf_sigma_px", sensor.psf_sigma_px);
-  require_positive("depth_mm", depth_mm);
-  PointSpread psf;
-  psf.sigma_px = sensor.psf_sigma_px;
-  psf.defocus_radius_px = 0;
-  if (!sensor.focus_distance_mm) return psf;
-  require_positive("sensor.pixel_pitch_mm", sensor.pixel_pitch_mm);
-  const double f = camera.focal_length_mm();
-  const double focus = *sensor.focus_distance_mm;
-  if (!(std::isfinite(focus) && focus > f)) {
-    fail("sensor.focus_distance_mm", focus,
-         "must be finite and beyond the focal length " + detail::format_number(f) + " mm");
-  }
-  // Thin lens: the sensor sits at the image distance of the focus plane; a
-  // point at depth z converges before or after it, leaving a blur circle of
-  // diameter A f |z - z_f| / (z (z_f - f)).
-  const double blur_diameter_mm =
-      aperture_diameter_mm(camera) * f * std::abs(depth_mm - focus) / (depth_mm * (focus - f));
-  psf.defocus_radius_px = blur_diameter_mm / 2 / sensor.pixel_pitch_mm;
-  return psf;
-}
-
 ImagePlane blur(const ImagePlane& plane, const PointSpread& psf) {
   ImagePlane out, scratch;
   blur(plane, psf, out, scratch);
@@ -664,7 +635,7 @@ void add_point_image(ImagePlane& electrons, double u, double v, double total_ele
   const double bound = std::sqrt(source_cov_px2[0] * source_cov_px2[2]);
   if (std::abs(cov) > bound * (1 + 1e-9) + 1e-12) {
     fail("source_cov_px2[1] (u-v)", cov,
-         "must not exceed sqrt(u-u * v-v) = " + detail::format_number(bound) + " in magnitude (positive semi-definite)");
+         "must not exceed sqrt(u-u * v-v) = " + check::format_number(bound) + " in magnitude (positive semi-definite)");
   }
   cov = std::clamp(cov, -bound, bound);
   if (total_electrons == 0 || electrons.values.empty()) return;

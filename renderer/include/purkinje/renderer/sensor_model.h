@@ -1,13 +1,14 @@
 #pragma once
-// From light to digital numbers: radiometric conversion, the optics'
-// point-spread function (Gaussian, plus a thin-lens defocus disc), point
-// images (glints), shot and read noise, gain, saturation and quantization.
+// From light to digital numbers: radiometric conversion, blur by the
+// optics' point spread (models/camera_optics.h), point images (glints),
+// shot and read noise, gain, saturation and quantization.
 // Everything random is a pure function of (seed, pixel): results do not
 // depend on thread count or order.
 
 #include <cstdint>
 
 #include "purkinje/models/camera.h"
+#include "purkinje/models/camera_optics.h"
 #include "purkinje/models/sensor.h"
 #include "purkinje/renderer/image.h"
 
@@ -20,21 +21,6 @@ double electrons_per_unit_radiance(const Sensor& sensor, double wavelength_nm);
 // Electrons from optical power (W) entering the aperture and landing on
 // the sensor: power * exposure * QE * lambda / (h c).
 double electrons_per_watt(const Sensor& sensor, double wavelength_nm);
-// Aperture diameter in mm: focal length / N.
-double aperture_diameter_mm(const Camera& camera);
-
-// Blur kernel of the optics at one depth: a Gaussian of psf_sigma_px
-// convolved with a uniform disc of the thin-lens blur circle's radius
-// (0 when the sensor has no focus distance).
-struct PointSpread {
-  double sigma_px = 0.5;
-  double defocus_radius_px = 0.0;
-};
-// The point spread for objects at `depth_mm` (camera z) seen by `camera`.
-// Throws std::invalid_argument for depth <= 0 or a focus distance not
-// beyond the focal length.
-PointSpread point_spread(const Camera& camera, double depth_mm);
-
 // Convolves a plane with the point spread (edges clamped). Energy is
 // conserved away from the borders. The input is taken as pixel averages
 // (as rendered), so the kernel's variance is the point spread's own,

@@ -79,6 +79,15 @@ struct BlobGlintSettings {
   double read_noise_e = 4;      // RMS, >= 0
 };
 
+// The settings for images from `camera` of an eye whose cornea is near
+// `nominal_cornea`, for a tracker that knows its camera: the sensor's
+// noise (which weighs a saturated glint's pixels), and the spot's width
+// when it is the camera's point spread wherever the eye is (no defocus at
+// that depth, point lights); else the detector estimates the width from
+// each frame. The other settings are the defaults.
+BlobGlintSettings glint_settings_for(const Camera& camera, const std::vector<Illuminator>& lights,
+                                     const Point3& nominal_cornea);
+
 class BlobGlintDetector final : public GlintDetector {
  public:
   explicit BlobGlintDetector(const BlobGlintSettings& settings = {});

@@ -11,9 +11,9 @@
 #include <string>
 
 #include "purkinje/models/scene_file.h"
-#include "purkinje/trackers/simulation.h"
+#include "purkinje/studies/simulation.h"
 
-namespace purkinje::trackers {
+namespace purkinje::studies {
 namespace {
 
 // Reports what it was given: the number of frames and the first frame's
@@ -105,4 +105,4 @@ TEST(Simulation, ResultsRefuseRepeatedKeysAndNumbersThatAreNotFinite) {
 }
 
 }  // namespace
-}  // namespace purkinje::trackers
+}  // namespace purkinje::studies

@@ -1,5 +1,5 @@
 #pragma once
-// The simulation core (the calibration issue): algorithms are strategies
+// The simulation core (the seed framework's spine): algorithms are strategies
 // with one method that takes the frames of a case (one scene, or the same
 // rig with the eye in several places) and returns named results, every
 // partial result among them; the core runs a list of algorithms over a
@@ -12,7 +12,7 @@
 
 #include "purkinje/models/scene.h"
 
-namespace purkinje::trackers {
+namespace purkinje::studies {
 
 // An algorithm's results in the order it added them: numbers, texts and
 // lists of numbers (a point, a covariance row by row), each with its unit.
@@ -74,4 +74,4 @@ std::string simulation_text(const std::vector<SimulationRun>& runs);
 // "units": {key: unit}, "error"}]}, keys in the order added.
 std::string simulation_json(const std::vector<SimulationRun>& runs);
 
-}  // namespace purkinje::trackers
+}  // namespace purkinje::studies

@@ -1,15 +1,15 @@
-// What `purkinje calibrate` and `purkinje track --scene` tell the glint
-// detector of the camera; expected values read off the bundled scene files.
-
-#include "tracker_optics.h"
+// What a tracker that knows its camera tells the glint detector
+// (`purkinje calibrate`, `purkinje track --scene`); expected values read off
+// the bundled scene files.
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
 #include "purkinje/models/scene_file.h"
+#include "purkinje/trackers/glints.h"
 
-namespace purkinje::tools {
+namespace purkinje::trackers {
 namespace {
 
 const std::filesystem::path kScenes = std::filesystem::path(PURKINJE_SOURCE_DIR) / "assets/scenes";
@@ -18,7 +18,7 @@ TEST(GlintSettingsFor, AFocusedCameraWithPointLightsTellsItsPointSpreadAndSensor
   // remote_noisy.json: psf_sigma_px 0.5, no focus distance, full well
   // 10000 e at gain 1, read noise 40 e.
   const Scene scene = load_scene(kScenes / "hard/remote_noisy.json");
-  const trackers::BlobGlintSettings s =
+  const BlobGlintSettings s =
       glint_settings_for(scene.cameras[0], scene.illuminators, scene.eyes[0].cornea_center());
   EXPECT_DOUBLE_EQ(s.spot_sigma_px, 0.5);
   EXPECT_DOUBLE_EQ(s.full_scale_e, 10000);
@@ -56,4 +56,4 @@ TEST(GlintSettingsFor, ACorneaAtTheCameraGetsNoPointSpread) {
 }
 
 }  // namespace
-}  // namespace purkinje::tools
+}  // namespace purkinje::trackers

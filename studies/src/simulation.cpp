@@ -1,4 +1,4 @@
-#include "purkinje/trackers/simulation.h"
+#include "purkinje/studies/simulation.h"
 
 #include <cmath>
 #include <exception>
@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace purkinje::trackers {
+namespace purkinje::studies {
 
 void Results::check_key(const std::string& key) const {
   if (key.empty()) throw std::invalid_argument("Results: an empty key");
@@ -120,4 +120,4 @@ std::string simulation_json(const std::vector<SimulationRun>& runs) {
   return out.dump(2) + "\n";
 }
 
-}  // namespace purkinje::trackers
+}  // namespace purkinje::studies

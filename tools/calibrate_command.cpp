@@ -1,150 +1,24 @@
-// `purkinje calibrate`: the calibration issue end to end. The scene's eye
-// fixates targets on the scene's screen; each frame is rendered and read
-// by purkinje's detectors; the model-based method and the polynomial are
-// calibrated on a grid of targets and then estimate gaze over a finer
-// grid, at the calibration position and after the head moves; every
-// estimate is scored against the scene's truth. Documented in docs/cli.md
+// `purkinje calibrate`: the calibration study (studies/calibration.h) on a
+// scene file, its tables and gaze map written. Documented in docs/cli.md
 // and docs/calibration.md.
 
-#include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <numbers>
-#include <optional>
-#include <random>
-#include <sstream>
 #include <stdexcept>
 #include <string>
-#include <vector>
 
 #include "commands.h"
 #include "output_checks.h"
 #include "progress.h"
-#include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
-#include "purkinje/renderer/render.h"
+#include "purkinje/studies/calibration.h"
 #include "purkinje/studies/simulation.h"
-#include "purkinje/studies/tracker.h"
-#include "purkinje/trackers/cornea.h"
-#include "purkinje/trackers/gaze.h"
-#include "purkinje/trackers/glints.h"
-#include "purkinje/trackers/image.h"
 #include "purkinje/trackers/image_file.h"
-#include "purkinje/trackers/pupil.h"
 
 namespace purkinje::tools {
-namespace {
 
 namespace fs = std::filesystem;
-constexpr double kDegree = std::numbers::pi / 180;
-
-// One rendered frame: the eye fixating a target from a head position.
-struct Frame {
-  int position = 0;  // 0: the scene's eye position; then the head moves in order
-  ScreenPoint target;
-  Point3 cornea_center;                 // truth
-  std::optional<trackers::GazeFeatures> found;  // from the image; nullopt: a glint or the pupil missed
-  int glints_told = 0;
-  // The detections' errors against the labels, per axis (px): each told
-  // glint's on the cornea, and the pupil ellipse's centre; and the errors
-  // over their reported standard deviations, of the glints that report one.
-  std::vector<double> glint_errors_px, pupil_errors_px, glint_errors_sd;
-  std::vector<double> glint_errors_without_sd_px;  // of the glints that report none
-};
-
-std::string format(double value, int digits = 4) {
-  std::ostringstream out;
-  out.precision(digits);
-  out << value;
-  return out.str();
-}
-
-// Renders the eye fixating `target` from rotation centre `center` and
-// reads the image with the detectors.
-Frame render_frame(const Scene& rig, const Point3& center, int position, const ScreenPoint& target,
-                   const studies::Tracker& tracker, std::uint64_t seed) {
-  Frame f;
-  f.position = position;
-  f.target = target;
-  Scene scene = rig;
-  const Eye& nominal = rig.eyes.front();
-  Eye eye = Eye::fixating(nominal.model(), center, rig.screen->at(target));
-  eye.set_appearance(nominal.appearance());
-  scene.eyes = {eye};
-  f.cornea_center = eye.cornea_center();
-  renderer::RenderOptions options;
-  options.seed = seed;
-  const renderer::RenderResult result = renderer::render(scene, 0, options);
-  const trackers::GreyView image = trackers::grey_view(std::span<const std::uint16_t>(result.sensor.values), result.sensor.width,
-                                             result.sensor.height, result.sensor.bits);
-  const trackers::Detections found = tracker.track(image);
-  const std::vector<trackers::Glint>& glints = found.glints;
-  const trackers::PupilFound* pupil = found.pupils.empty() ? nullptr : &found.pupils.front();
-  const EyeInCameraTruth& view = result.truth.views.front();
-  for (const trackers::Glint& g : glints) {
-    if (g.illuminator < 0) continue;
-    ++f.glints_told;
-    const GlintTruth& label = view.glints[g.illuminator];
-    if (label.status == PathStatus::ok && std::hypot(g.centre.u - label.pixel.u, g.centre.v - label.pixel.v) <= 5) {
-      f.glint_errors_px.push_back(g.centre.u - label.pixel.u);
-      f.glint_errors_px.push_back(g.centre.v - label.pixel.v);
-      if (g.centre_sd_u_px > 0 && g.centre_sd_v_px > 0) {
-        f.glint_errors_sd.push_back((g.centre.u - label.pixel.u) / g.centre_sd_u_px);
-        f.glint_errors_sd.push_back((g.centre.v - label.pixel.v) / g.centre_sd_v_px);
-      } else {
-        f.glint_errors_without_sd_px.push_back(g.centre.u - label.pixel.u);
-        f.glint_errors_without_sd_px.push_back(g.centre.v - label.pixel.v);
-      }
-    }
-  }
-  if (pupil && view.pupil.ellipse_valid) {
-    const Pixel& label = view.pupil.ellipse.center;
-    if (std::hypot(pupil->centre.u - label.u, pupil->centre.v - label.v) <= 5) {
-      f.pupil_errors_px = {pupil->centre.u - label.u, pupil->centre.v - label.v};
-    }
-  }
-  if (pupil && f.glints_told >= 2) {
-    f.found = trackers::GazeFeatures{glints, pupil->centre, trackers::ellipse_outline(*pupil->ellipse)};
-  }
-  return f;
-}
-
-// The RMS of a frame's detection errors per axis; empty when there are none.
-std::string rms(const std::vector<double>& errors) {
-  if (errors.empty()) return "";
-  double sum = 0;
-  for (const double e : errors) sum += e * e;
-  return format(std::sqrt(sum / static_cast<double>(errors.size())), 6);
-}
-
-// Summaries of one method at one head position.
-struct Tally {
-  std::vector<double> errors_deg;
-  int missing = 0;
-  int within_3sd_x = 0, within_3sd_y = 0, with_sd = 0;
-};
-
-void add_errors(studies::Results& r, const std::string& prefix, const Tally& t) {
-  std::vector<double> e = t.errors_deg;
-  std::sort(e.begin(), e.end());
-  r.add(prefix + "frames", static_cast<double>(e.size()));
-  r.add(prefix + "frames_without_estimate", static_cast<double>(t.missing));
-  if (e.empty()) return;
-  double sum = 0;
-  for (const double x : e) sum += x;
-  r.add(prefix + "error_mean", sum / e.size(), "deg");
-  r.add(prefix + "error_median", e[e.size() / 2], "deg");
-  r.add(prefix + "error_p95", e[std::min(e.size() - 1, static_cast<std::size_t>(0.95 * e.size()))], "deg");
-  r.add(prefix + "error_max", e.back(), "deg");
-  if (t.with_sd > 0) {
-    r.add(prefix + "within_3sd_screen_x", 100.0 * t.within_3sd_x / t.with_sd, "%");
-    r.add(prefix + "within_3sd_screen_y", 100.0 * t.within_3sd_y / t.with_sd, "%");
-  }
-}
-
-}  // namespace
 
 int run_calibrate(const CalibrateRequest& request) {
   if (const auto refusal = check_output_folder(request.output_dir, {},
@@ -154,367 +28,27 @@ int run_calibrate(const CalibrateRequest& request) {
     return refusal->exit_code;
   }
   Scene rig;
+  studies::CalibrationStudy study;
   try {
     rig = load_scene(request.scene_file);
-    if (!rig.screen) {
-      throw std::runtime_error(request.scene_file + ": no \"screen\" block: calibration needs the screen the eye "
-                               "looks at (docs/scene-format.md)");
-    }
-    if (rig.illuminators.size() < 2) {
-      throw std::runtime_error(request.scene_file + ": " + std::to_string(rig.illuminators.size()) +
-                               " illuminator(s): the cornea's centre needs the glints of two or more");
-    }
-    if (rig.eyes.size() != 1) {
-      throw std::runtime_error(request.scene_file + ": " + std::to_string(rig.eyes.size()) +
-                               " eyes: calibration follows one eye");
-    }
-    const double q = rig.eyes.front().model().anterior_cornea.asphericity;
-    if (!request.tracker_cornea && !(q > -1 && q < 10)) {
-      throw std::runtime_error(request.scene_file + ": the eye's anterior_cornea asphericity " + format(q) +
-                               ": the tracker's cornea must be an ellipsoid, Q in (-1, 10); give another "
-                               "with --tracker-cornea R,Q");
-    }
+    studies::check_calibration_rig(rig, request.scene_file, request);
+    Progress progress("calibrate: frames", studies::calibration_frames(request), request.quiet);
+    study = studies::run_calibration(rig, request, [&] { progress.step(); });
   } catch (const std::exception& error) {
     std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
-    return kBadInput;
-  }
-  const Camera& camera = rig.cameras.front();
-  const Screen& screen = *rig.screen;
-  const Point3 home = rig.eyes.front().rotation_center();
-  // Where the tracker expects the cornea (its nominal eye): every fit's
-  // start, never the frame's truth.
-  const Point3 nominal_cornea = rig.eyes.front().cornea_center();
-  // The tracker knows its rig, where the rig's lights put glints on the
-  // scene's eye, and an eye model: the scene eye's anterior cornea (or the
-  // one asked for) with one refracting surface, whose index is the eye's
-  // own behind a one-surface cornea and otherwise the keratometric 1.3375,
-  // which gives the anterior radius the whole cornea's power.
-  const EyeModel& scene_eye = rig.eyes.front().model();
-  trackers::GazeEyeModel nominal;
-  nominal.cornea_radius_mm =
-      request.tracker_cornea ? (*request.tracker_cornea)[0] : scene_eye.anterior_cornea.radius_mm;
-  nominal.cornea_asphericity =
-      request.tracker_cornea ? (*request.tracker_cornea)[1] : scene_eye.anterior_cornea.asphericity;
-  nominal.refractive_index = scene_eye.posterior_cornea ? 1.3375 : scene_eye.aqueous_index;
-  nominal.pupil_depth_mm = scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm;
-
-  std::vector<std::pair<std::string, Point3>> positions{{"home", home}};
-  for (const std::array<double, 3>& m : request.head_moves) {
-    positions.push_back({"moved " + format(m[0]) + "," + format(m[1]) + "," + format(m[2]) + " mm",
-                         home + Vector3{m[0], m[1], m[2]}});
-  }
-  std::vector<Frame> calibration, tests, noise_frames;
-  double spot_sigma_px = 0;
-  std::uint64_t seed = request.seed;
-  try {
-    // The tracker knows its rig: the camera's optics (the spot's width, the
-    // sensor's noise) and where the lights put glints on the nominal eye.
-    const studies::Tracker tracker(camera, rig.illuminators, rig.eyes.front());
-    spot_sigma_px = tracker.glint_settings().spot_sigma_px;
-    Progress progress("calibrate: frames", static_cast<std::size_t>(
-        request.calibration_grid * request.calibration_grid + positions.size() * request.grid * request.grid +
-        request.noise_frames), request.quiet);
-    for (const ScreenPoint& t : screen.grid(request.calibration_grid, request.calibration_grid)) {
-      calibration.push_back(render_frame(rig, home, 0, t, tracker, seed++));
-      progress.step();
-    }
-    for (std::size_t p = 0; p < positions.size(); ++p) {
-      for (const ScreenPoint& t : screen.grid(request.grid, request.grid)) {
-        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, tracker, seed++));
-        progress.step();
-      }
-    }
-    // Targets uniform over the screen, from the seed: the noise frames
-    // are neither calibration nor test frames.
-    std::mt19937_64 random(request.seed);
-    std::uniform_real_distribution<double> along(0, 1);
-    for (int i = 0; i < request.noise_frames; ++i) {
-      const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
-      noise_frames.push_back(render_frame(rig, home, 0, t, tracker, seed++));
-      progress.step();
-    }
-  } catch (const std::exception& error) {
-    std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
-    return kBadInput;
-  }
-
-  // Calibration on the frames whose features were all found.
-  std::vector<trackers::GazeFeatures> features;
-  std::vector<Point3> targets;
-  std::vector<ScreenPoint> screen_targets;
-  for (const Frame& f : calibration) {
-    if (!f.found) continue;
-    features.push_back(*f.found);
-    targets.push_back(screen.at(f.target));
-    screen_targets.push_back(f.target);
-  }
-  if (features.size() < 6) {
-    std::cerr << "purkinje calibrate: error: the detectors found glints and pupil in " << features.size() << " of "
-              << calibration.size() << " calibration frames: at least 6 are needed\n";
-    return kBadInput;
-  }
-  // The detectors' noise: as given, or measured against the noise frames'
-  // labels, or the calibration frames' without noise frames (a simulator
-  // knows them; a tracker on real images would take its detectors'
-  // specification). The RMS error, clipped as the
-  // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
-  // so that a merged glint does not inflate it.
-  const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
-  const std::vector<Frame>& measured_on = noise_frames.empty() ? calibration : noise_frames;
-  const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given,
-                            double fallback) {
-    if (given) return *given;
-    std::vector<double> all;
-    for (const Frame& f : measured_on) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
-    double sd = INFINITY;
-    for (int round = 0; round < 20; ++round) {
-      double sum = 0;
-      std::size_t count = 0;
-      for (const double e : all) {
-        if (std::abs(e) <= clip * sd) sum += e * e, ++count;
-      }
-      const double next = count > 0 ? std::sqrt(sum / count) : fallback;
-      if (next == sd) break;
-      sd = next;
-    }
-    return std::max(1e-3, sd);
-  };
-  trackers::FeatureNoise noise{
-      measured(&Frame::glint_errors_px, request.glint_noise_px, trackers::FeatureNoise{}.glint_px),
-      measured(&Frame::pupil_errors_px, request.pupil_noise_px, trackers::FeatureNoise{}.pupil_px)};
-  // Glints that report their own standard deviation (saturated ones) keep
-  // it, scaled by the RMS of their errors over it, measured the same way;
-  // a given --glint-noise serves every glint.
-  const bool own_glint_sd =
-      !request.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(),
-                                             [](const Frame& f) { return !f.glint_errors_sd.empty(); });
-  if (own_glint_sd) {
-    noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
-    // glint_px then serves only the glints without their own, where there are any.
-    if (std::any_of(measured_on.begin(), measured_on.end(),
-                    [](const Frame& f) { return !f.glint_errors_without_sd_px.empty(); })) {
-      noise.glint_px = measured(&Frame::glint_errors_without_sd_px, std::nullopt, noise.glint_px);
-    }
-  }
-  trackers::ModelGazeCalibrationSettings settings;
-  settings.fit_cornea_radius = request.fit_radius;
-  settings.fit_pupil_depth = request.fit_pupil_depth;
-  settings.noise = noise;
-  settings.propagate_noise = true;
-  trackers::ModelGazeCalibration model;
-  std::optional<trackers::PolynomialGaze> polynomial;
-  try {
-    model = trackers::calibrate_model_gaze(camera, rig.illuminators, features, targets, nominal, nominal_cornea,
-                                           settings);
-    polynomial = trackers::PolynomialGaze::calibrate(features, screen_targets);
-  } catch (const std::exception& error) {
-    std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
-    return kBadInput;
-  }
-  if (!model.converged || model.covariance.empty()) {
-    std::cerr << "purkinje calibrate: error: the model-based calibration failed:";
-    for (const std::string& w : model.warnings) std::cerr << "\n  " << w;
-    std::cerr << "\n";
-    return kBadInput;
-  }
-
-  std::vector<studies::SimulationRun> runs;
-  {
-    studies::SimulationRun run{"calibration", "model-based", {}, std::nullopt};
-    studies::Results& r = run.results;
-    r.add("frames_used", static_cast<double>(features.size()));
-    r.add("frames_rendered", static_cast<double>(calibration.size()));
-    r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
-    r.add("kappa_vertical", model.model.kappa_vertical_rad / kDegree, "deg");
-    r.add("kappa_true_horizontal", rig.eyes.front().model().kappa_horizontal_rad / kDegree, "deg");
-    r.add("kappa_true_vertical", rig.eyes.front().model().kappa_vertical_rad / kDegree, "deg");
-    if (model.covariance.size() >= 4) {
-      r.add("kappa_horizontal_sd", std::sqrt(model.covariance[0]) / kDegree, "deg");
-      const int n = request.fit_pupil_depth ? 3 : 2;
-      r.add("kappa_vertical_sd", std::sqrt(model.covariance[n + 1]) / kDegree, "deg");
-      if (request.fit_pupil_depth) r.add("pupil_depth_sd", std::sqrt(model.covariance[8]), "mm");
-    }
-    r.add("pupil_depth", model.model.pupil_depth_mm, "mm");
-    r.add("pupil_depth_true", scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm, "mm");
-    r.add("cornea_radius", model.model.cornea_radius_mm, "mm");
-    if (request.fit_radius) r.add("cornea_radius_sd", model.cornea_radius_sd_mm, "mm");
-    r.add("cornea_radius_true", scene_eye.anterior_cornea.radius_mm, "mm");
-    r.add("cornea_asphericity", nominal.cornea_asphericity);
-    r.add("cornea_asphericity_true", scene_eye.anterior_cornea.asphericity);
-    r.add("tracker_cornea_from", request.tracker_cornea ? std::string("given") : std::string("the scene's eye"));
-    r.add("refractive_index", nominal.refractive_index);
-    r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
-    if (model.rotation_center) {
-      r.add("rotation_center", {model.rotation_center->x, model.rotation_center->y, model.rotation_center->z}, "mm");
-      r.add("rotation_center_sd",
-            {model.rotation_center_sd_mm[0], model.rotation_center_sd_mm[1], model.rotation_center_sd_mm[2]}, "mm");
-      r.add("rotation_center_error", distance(*model.rotation_center, home), "mm");
-      r.add("rotation_distance", model.rotation_distance_mm, "mm");
-    } else {
-      r.add("rotation_center", std::string("not determined: the optical axes are too alike"));
-    }
-    r.add("glint_noise", noise.glint_px, "px");
-    const std::string measured_from = noise_frames.empty()
-                                          ? std::string("measured on the calibration frames")
-                                          : "measured on " + std::to_string(noise_frames.size()) + " noise frames";
-    r.add("glint_noise_from", request.glint_noise_px ? std::string("given") : measured_from);
-    if (spot_sigma_px > 0) {
-      r.add("glint_spot_sigma", spot_sigma_px, "px");
-    } else {
-      r.add("glint_spot_sigma", std::string("estimated per frame (defocus or sized lights)"));
-    }
-    r.add("glint_sd_scale", noise.glint_sd_scale);
-    r.add("glint_sd_from", own_glint_sd ? "the detector's, scaled as " + measured_from
-                                        : std::string("none: every glint has glint_noise"));
-    r.add("pupil_noise", noise.pupil_px, "px");
-    r.add("pupil_noise_from", request.pupil_noise_px ? std::string("given") : measured_from);
-    std::string warnings;
-    for (const std::string& w : model.warnings) warnings += (warnings.empty() ? "" : "; ") + w;
-    r.add("warnings", warnings.empty() ? std::string("none") : warnings);
-    runs.push_back(std::move(run));
-  }
-  {
-    studies::SimulationRun run{"calibration", "polynomial", {}, std::nullopt};
-    run.results.add("frames_used", static_cast<double>(features.size()));
-    run.results.add("rms_residual_at_targets", polynomial->rms_residual_mm(), "mm");
-    runs.push_back(std::move(run));
-  }
-
-  // Every test frame by both methods, scored against the truth.
-  std::ostringstream csv;
-  csv << "position,target_x_mm,target_y_mm,glints_told,pupil_found,glint_error_rms_px,pupil_error_rms_px,"
-         "cornea_lateral_error_mm,cornea_depth_error_mm,"
-         "cornea_depth_sd_mm,cornea_across_x_error_mm,cornea_across_y_error_mm,cornea_across_x_sd_mm,"
-         "cornea_across_y_sd_mm,model_x_mm,model_y_mm,model_sd_x_mm,model_sd_y_mm,model_error_deg,polynomial_x_mm,"
-         "polynomial_y_mm,polynomial_error_deg\n";
-  std::vector<trackers::GazeMapPanel> panels;
-  try {
-    for (std::size_t p = 0; p < positions.size(); ++p) {
-      const std::string& name = positions[p].first;
-      Tally model_tally, polynomial_tally;
-      std::vector<double> lateral, depth;
-      int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
-      trackers::GazeMapPanel panel{name, {}, {{}, {}}};
-      for (const Frame& f : tests) {
-        if (f.position != static_cast<int>(p)) continue;
-        panel.targets.push_back(f.target);
-        const auto error_deg = [&](const ScreenPoint& p) {
-          return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
-        };
-        csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
-            << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
-        std::optional<ScreenPoint> by_model, by_polynomial;
-        if (f.found) {
-          const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
-                                                                      screen, nominal_cornea, noise);
-          // The cornea's error along the camera's line of sight (depth) and
-          // across it, on two fixed axes: the camera's x and y made
-          // perpendicular to the line of sight. Each is checked against its
-          // own s.d., as the screen's x and y are.
-          const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
-          const Vector3 camera_x = camera.world_from_camera() * Vector3{1, 0, 0};
-          const Vector3 across_x = (camera_x - dot(camera_x, sight) * sight) / (camera_x - dot(camera_x, sight) * sight).norm();
-          const Vector3 across_y = cross(sight, across_x);
-          const Vector3 e = g.cornea_center - f.cornea_center;
-          const auto variance_along = [&](const Vector3& d) {
-            double v = 0;
-            for (int a = 0; a < 3; ++a) {
-              for (int b = 0; b < 3; ++b) v += d[a] * g.cornea_covariance_mm2[3 * a + b] * d[b];
-            }
-            return v;
-          };
-          const double along = dot(e, sight);
-          const double across = (e - along * sight).norm();
-          const double depth_var = variance_along(sight);
-          if (g.cornea_determined) {
-            csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var) << ',' << dot(e, across_x) << ','
-                << dot(e, across_y) << ',' << std::sqrt(variance_along(across_x)) << ','
-                << std::sqrt(variance_along(across_y));
-          } else {
-            csv << ",,,,,,,";
-          }
-          if (g.cornea_determined) {
-            lateral.push_back(across);
-            depth.push_back(along);
-            ++cornea_with_sd;
-            depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
-            lateral_within += std::abs(dot(e, across_x)) <= 3 * std::sqrt(variance_along(across_x)) &&
-                                      std::abs(dot(e, across_y)) <= 3 * std::sqrt(variance_along(across_y))
-                                  ? 1
-                                  : 0;
-          }
-          if (g.valid && g.on_screen) {
-            by_model = g.on_screen;
-            model_tally.errors_deg.push_back(error_deg(*by_model));
-            csv << ',' << by_model->x_mm << ',' << by_model->y_mm;
-            if (g.on_screen_covariance_mm2) {
-              const double sx = std::sqrt((*g.on_screen_covariance_mm2)[0]);
-              const double sy = std::sqrt((*g.on_screen_covariance_mm2)[3]);
-              ++model_tally.with_sd;
-              model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
-              model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
-              csv << ',' << sx << ',' << sy;
-            } else {
-              csv << ",,";
-            }
-            csv << ',' << model_tally.errors_deg.back();
-          } else {
-            ++model_tally.missing;
-            csv << ",,,,,";
-          }
-          by_polynomial = polynomial->estimate(*f.found);
-        } else {
-          ++model_tally.missing;
-          csv << ",,,,,,,,,,,,";
-        }
-        if (by_polynomial) {
-          polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));
-          csv << ',' << by_polynomial->x_mm << ',' << by_polynomial->y_mm << ',' << polynomial_tally.errors_deg.back();
-        } else {
-          ++polynomial_tally.missing;
-          csv << ",,,";
-        }
-        csv << '\n';
-        panel.estimates[0].push_back(by_model);
-        panel.estimates[1].push_back(by_polynomial);
-      }
-      studies::SimulationRun m{name, "model-based", {}, std::nullopt};
-      add_errors(m.results, "gaze_", model_tally);
-      if (!depth.empty()) {
-        double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
-        for (std::size_t i = 0; i < depth.size(); ++i) {
-          sum_lateral += lateral[i];
-          sum_depth += depth[i];
-          sum_depth2 += depth[i] * depth[i];
-        }
-        const double n = static_cast<double>(depth.size());
-        m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
-        m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
-        m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
-        m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
-        m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
-      }
-      runs.push_back(std::move(m));
-      studies::SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};
-      add_errors(by_polynomial_run.results, "gaze_", polynomial_tally);
-      runs.push_back(std::move(by_polynomial_run));
-      panels.push_back(std::move(panel));
-    }
-  } catch (const std::exception& error) {
-    std::cerr << "purkinje calibrate: error: while scoring: " << error.what() << "\n";
     return kBadInput;
   }
 
   const fs::path dir(request.output_dir);
-  const std::string text = studies::simulation_text(runs);
+  const std::string text = studies::simulation_text(study.runs);
   try {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
     write_file_atomically(dir / "calibration.txt", text);
-    write_file_atomically(dir / "calibration.json", studies::simulation_json(runs));
-    write_file_atomically(dir / "frames.csv", csv.str());
-    trackers::write_gaze_map(dir / "gaze_error.png", screen, {"model-based", "polynomial"}, panels);
+    write_file_atomically(dir / "calibration.json", studies::simulation_json(study.runs));
+    write_file_atomically(dir / "frames.csv", study.frames_csv);
+    trackers::write_gaze_map(dir / "gaze_error.png", *rig.screen, {"model-based", "polynomial"}, study.panels);
   } catch (const std::exception& error) {
     std::cerr << "purkinje calibrate: error: " << error.what() << "\n";
     return kOutputError;

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "purkinje/trackers/gaze.h"
+#include "purkinje/studies/calibration.h"
 
 namespace purkinje::tools {
 
@@ -33,26 +33,10 @@ struct ScoreRequest : ScoreOutput {
   double min_confidence = 0;  // pupils reported less confident are left out
 };
 
-struct CalibrateRequest {
+struct CalibrateRequest : studies::CalibrationSettings {
   std::string scene_file;  // with a screen; its eye is the one followed
   std::string output_dir;
-  int grid = 8;              // test targets: grid x grid over the screen, at each head position
-  int calibration_grid = 3;  // calibration targets, at the scene's eye position
-  std::vector<std::array<double, 3>> head_moves;  // mm, test positions beside the scene's
-  // The tracker's anterior cornea: apex radius (mm) and asphericity Q;
-  // absent: the scene eye's.
-  std::optional<std::array<double, 2>> tracker_cornea;
-  bool fit_radius = false;
-  bool fit_pupil_depth = false;
-  // The detectors' noise (s.d., px) the reported uncertainties assume;
-  // absent: measured against the labels of the noise frames (below).
-  std::optional<double> glint_noise_px, pupil_noise_px;
-  // Frames of the eye at its place fixating random screen points, rendered
-  // only to measure the detectors' noise against their labels; 0: the
-  // calibration frames serve (nine measure a deviation to about 12%).
-  int noise_frames = 64;
-  std::uint64_t seed = 1;       // of the first frame's render; each next frame the next
-  bool quiet = false;           // no progress on stderr
+  bool quiet = false;  // no progress on stderr
 };
 
 int run_track(const TrackRequest& request);

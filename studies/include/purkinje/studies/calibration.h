@@ -1,0 +1,65 @@
+#pragma once
+// The calibration study (`purkinje calibrate`; docs/calibration.md): the
+// rig's eye fixates targets on its screen; each frame is rendered and
+// read by purkinje's tracker (tracker.h); the model-based method and the
+// polynomial are calibrated on a grid of targets at the eye's place, then
+// estimate gaze over a finer grid there and after the head moves; every
+// estimate is scored against the scene's truth.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "purkinje/models/scene.h"
+#include "purkinje/studies/simulation.h"
+#include "purkinje/trackers/gaze.h"
+#include "purkinje/trackers/image_file.h"
+
+namespace purkinje::studies {
+
+struct CalibrationSettings {
+  int grid = 8;              // test targets: grid x grid over the screen, at each head position
+  int calibration_grid = 3;  // calibration targets, at the scene's eye position
+  std::vector<std::array<double, 3>> head_moves;  // mm, test positions beside the scene's
+  // The tracker's anterior cornea: apex radius (mm) and asphericity Q;
+  // absent: the scene eye's.
+  std::optional<std::array<double, 2>> tracker_cornea;
+  bool fit_radius = false;
+  bool fit_pupil_depth = false;
+  // The detectors' noise (s.d., px) the reported uncertainties assume;
+  // absent: measured against the labels of the noise frames (below).
+  std::optional<double> glint_noise_px, pupil_noise_px;
+  // Frames of the eye at its place fixating random screen points, rendered
+  // only to measure the detectors' noise against their labels; 0: the
+  // calibration frames serve (nine measure a deviation to about 12%).
+  int noise_frames = 64;
+  std::uint64_t seed = 1;  // of the first frame's render; each next frame the next
+};
+
+// Throws std::runtime_error, naming `rig_file`, for a rig the study cannot
+// calibrate: no screen, fewer than two lights, other than one eye, or (with
+// no tracker cornea given) an eye whose cornea is no ellipsoid.
+void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings);
+
+// How many frames run_calibration renders (for progress).
+std::size_t calibration_frames(const CalibrationSettings& settings);
+
+struct CalibrationStudy {
+  // Per method, the calibration's results, then per head position the
+  // test frames' gaze and cornea errors (every partial result kept).
+  std::vector<SimulationRun> runs;
+  std::string frames_csv;  // a row per test frame
+  std::vector<trackers::GazeMapPanel> panels;  // per head position: targets and both methods' estimates
+};
+
+// The study on a rig check_calibration_rig accepts, `step` called after
+// each rendered frame. Throws std::runtime_error when the detectors find
+// the features in fewer than six calibration frames or the model-based
+// calibration fails (with its warnings), and for failures while scoring.
+CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& settings,
+                                 const std::function<void()>& step = {});
+
+}  // namespace purkinje::studies

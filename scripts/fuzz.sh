@@ -2,8 +2,9 @@
 # Fuzzes the file readers (tests/fuzz): builds the libFuzzer targets with
 # clang++ under ASan+UBSan in build/fuzz, then runs each for SECONDS on a
 # fresh copy of its corpus, one per core at a time. New inputs go to the copy
-# (build/fuzz/corpus/), never to the tree; a finding stops the run with a
-# non-zero exit, its input saved in build/fuzz/findings/.
+# (build/fuzz/corpus/), never to the tree; a finding stops the run (once the
+# targets fuzzed beside it end) with a non-zero exit, its input saved in
+# build/fuzz/findings/.
 #
 #   bash scripts/fuzz.sh [SECONDS [TARGET...]]   (60 s; scene obj labels detections)
 set -euo pipefail
@@ -51,6 +52,8 @@ fuzz_one() {
 }
 failed=0
 cores="$(nproc)"
+pids=()
+trap 'kill "${pids[@]}" 2>/dev/null || true' EXIT  # no fuzzer outlives the script
 for ((first = 0; first < ${#targets[@]}; first += cores)); do
   pids=()
   for target in "${targets[@]:first:cores}"; do
@@ -58,6 +61,6 @@ for ((first = 0; first < ${#targets[@]}; first += cores)); do
     pids+=($!)
   done
   for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
+  [ "$failed" -eq 0 ] || exit 1  # a finding stops the run after its batch
 done
-[ "$failed" -eq 0 ] || exit 1
 echo "fuzz: ${targets[*]}: no findings in ${seconds} s each"

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -33,7 +34,13 @@ using studies::LabelledImage;
 // files left out go to stderr.
 std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs, bool quiet) {
   std::vector<std::string> notes;
-  const std::vector<fs::path> files = studies::labels_files(inputs, notes);
+  std::vector<fs::path> files;
+  try {
+    files = studies::labels_files(inputs, notes);
+  } catch (...) {
+    for (const std::string& note : notes) std::cerr << note << "\n";  // of the inputs before the bad one
+    throw;
+  }
   for (const std::string& note : notes) std::cerr << note << "\n";
   Progress progress("reading labels", files.size(), quiet);
   return studies::read_labelled_images(files, [&] { progress.step(); });

@@ -10,6 +10,7 @@
 // millimetres, the rays may start a metre away): see RayTracer.
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "purkinje/models/geometry.h"

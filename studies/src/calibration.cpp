@@ -127,6 +127,296 @@ void add_errors(Results& r, const std::string& prefix, const Tally& t) {
   }
 }
 
+// The eye model the tracker assumes: the scene eye's anterior cornea (or
+// the one asked for) with one refracting surface, whose index is the
+// eye's own behind a one-surface cornea and otherwise the keratometric
+// 1.3375, which gives the anterior radius the whole cornea's power.
+trackers::GazeEyeModel tracker_eye(const Scene& rig, const CalibrationSettings& settings) {
+  const EyeModel& scene_eye = rig.eyes.front().model();
+  trackers::GazeEyeModel nominal;
+  nominal.cornea_radius_mm =
+      settings.tracker_cornea ? (*settings.tracker_cornea)[0] : scene_eye.anterior_cornea.radius_mm;
+  nominal.cornea_asphericity =
+      settings.tracker_cornea ? (*settings.tracker_cornea)[1] : scene_eye.anterior_cornea.asphericity;
+  nominal.refractive_index = scene_eye.posterior_cornea ? 1.3375 : scene_eye.aqueous_index;
+  nominal.pupil_depth_mm = scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm;
+  return nominal;
+}
+
+// Every frame the study renders, read by the tracker.
+struct RenderedFrames {
+  std::vector<Frame> calibration, tests, noise;
+  double spot_sigma_px = 0;  // what the tracker told its glint detector (0: estimated per frame)
+};
+
+RenderedFrames render_frames(const Scene& rig, const std::vector<std::pair<std::string, Point3>>& positions,
+                             const CalibrationSettings& settings, const std::function<void()>& step) {
+  const Screen& screen = *rig.screen;
+  const Point3 home = positions.front().second;
+  RenderedFrames frames;
+  std::uint64_t seed = settings.seed;
+  // The tracker knows its rig: the camera's optics (the spot's width, the
+  // sensor's noise) and where the lights put glints on the nominal eye.
+  const Tracker tracker(rig.cameras.front(), rig.illuminators, rig.eyes.front());
+  frames.spot_sigma_px = tracker.glint_settings().spot_sigma_px;
+  for (const ScreenPoint& t : screen.grid(settings.calibration_grid, settings.calibration_grid)) {
+    frames.calibration.push_back(render_frame(rig, home, 0, t, tracker, seed++));
+    if (step) step();
+  }
+  for (std::size_t p = 0; p < positions.size(); ++p) {
+    for (const ScreenPoint& t : screen.grid(settings.grid, settings.grid)) {
+      frames.tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, tracker, seed++));
+      if (step) step();
+    }
+  }
+  // Targets uniform over the screen, from the seed: the noise frames
+  // are neither calibration nor test frames.
+  std::mt19937_64 random(settings.seed);
+  std::uniform_real_distribution<double> along(0, 1);
+  for (int i = 0; i < settings.noise_frames; ++i) {
+    const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
+    frames.noise.push_back(render_frame(rig, home, 0, t, tracker, seed++));
+    if (step) step();
+  }
+  return frames;
+}
+
+struct MeasuredNoise {
+  trackers::FeatureNoise noise;
+  bool own_glint_sd = false;  // saturated glints keep their own s.d., scaled
+  std::string measured_from;  // for people
+};
+
+MeasuredNoise measure_noise(const RenderedFrames& frames, const CalibrationSettings& settings) {
+  // The detectors' noise: as given, or measured against the noise frames'
+  // labels, or the calibration frames' without noise frames (a simulator
+  // knows them; a tracker on real images would take its detectors'
+  // specification). The RMS error, clipped as the
+  // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
+  // so that a merged glint does not inflate it.
+  const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
+  const std::vector<Frame>& measured_on = frames.noise.empty() ? frames.calibration : frames.noise;
+  const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given,
+                            double fallback) {
+    if (given) return *given;
+    std::vector<double> all;
+    for (const Frame& f : measured_on) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
+    double sd = INFINITY;
+    for (int round = 0; round < 20; ++round) {
+      double sum = 0;
+      std::size_t count = 0;
+      for (const double e : all) {
+        if (std::abs(e) <= clip * sd) sum += e * e, ++count;
+      }
+      const double next = count > 0 ? std::sqrt(sum / count) : fallback;
+      if (next == sd) break;
+      sd = next;
+    }
+    return std::max(1e-3, sd);
+  };
+  MeasuredNoise out;
+  trackers::FeatureNoise& noise = out.noise;
+  noise = {measured(&Frame::glint_errors_px, settings.glint_noise_px, trackers::FeatureNoise{}.glint_px),
+           measured(&Frame::pupil_errors_px, settings.pupil_noise_px, trackers::FeatureNoise{}.pupil_px)};
+  // Glints that report their own standard deviation (saturated ones) keep
+  // it, scaled by the RMS of their errors over it, measured the same way;
+  // a given --glint-noise serves every glint.
+  out.own_glint_sd = !settings.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(), [](const Frame& f) {
+    return !f.glint_errors_sd.empty();
+  });
+  if (out.own_glint_sd) {
+    noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
+    // glint_px then serves only the glints without their own, where there are any.
+    if (std::any_of(measured_on.begin(), measured_on.end(),
+                    [](const Frame& f) { return !f.glint_errors_without_sd_px.empty(); })) {
+      noise.glint_px = measured(&Frame::glint_errors_without_sd_px, std::nullopt, noise.glint_px);
+    }
+  }
+  out.measured_from = frames.noise.empty() ? std::string("measured on the calibration frames")
+                                           : "measured on " + std::to_string(frames.noise.size()) + " noise frames";
+  return out;
+}
+
+// The model-based calibration's results, every partial one.
+SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings& settings,
+                                    const trackers::GazeEyeModel& nominal, const trackers::ModelGazeCalibration& model,
+                                    std::size_t frames_used, const RenderedFrames& frames,
+                                    const MeasuredNoise& measured) {
+  const EyeModel& scene_eye = rig.eyes.front().model();
+  const Point3 home = rig.eyes.front().rotation_center();
+  const std::string& measured_from = measured.measured_from;
+  const trackers::FeatureNoise& noise = measured.noise;
+  const bool own_glint_sd = measured.own_glint_sd;
+  SimulationRun run{"calibration", "model-based", {}, std::nullopt};
+  Results& r = run.results;
+  r.add("frames_used", static_cast<double>(frames_used));
+  r.add("frames_rendered", static_cast<double>(frames.calibration.size()));
+  r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
+  r.add("kappa_vertical", model.model.kappa_vertical_rad / kDegree, "deg");
+  r.add("kappa_true_horizontal", rig.eyes.front().model().kappa_horizontal_rad / kDegree, "deg");
+  r.add("kappa_true_vertical", rig.eyes.front().model().kappa_vertical_rad / kDegree, "deg");
+  if (model.covariance.size() >= 4) {
+    r.add("kappa_horizontal_sd", std::sqrt(model.covariance[0]) / kDegree, "deg");
+    const int n = settings.fit_pupil_depth ? 3 : 2;
+    r.add("kappa_vertical_sd", std::sqrt(model.covariance[n + 1]) / kDegree, "deg");
+    if (settings.fit_pupil_depth) r.add("pupil_depth_sd", std::sqrt(model.covariance[8]), "mm");
+  }
+  r.add("pupil_depth", model.model.pupil_depth_mm, "mm");
+  r.add("pupil_depth_true", scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm, "mm");
+  r.add("cornea_radius", model.model.cornea_radius_mm, "mm");
+  if (settings.fit_radius) r.add("cornea_radius_sd", model.cornea_radius_sd_mm, "mm");
+  r.add("cornea_radius_true", scene_eye.anterior_cornea.radius_mm, "mm");
+  r.add("cornea_asphericity", nominal.cornea_asphericity);
+  r.add("cornea_asphericity_true", scene_eye.anterior_cornea.asphericity);
+  r.add("tracker_cornea_from", settings.tracker_cornea ? std::string("given") : std::string("the scene's eye"));
+  r.add("refractive_index", nominal.refractive_index);
+  r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
+  if (model.rotation_center) {
+    r.add("rotation_center", {model.rotation_center->x, model.rotation_center->y, model.rotation_center->z}, "mm");
+    r.add("rotation_center_sd",
+          {model.rotation_center_sd_mm[0], model.rotation_center_sd_mm[1], model.rotation_center_sd_mm[2]}, "mm");
+    r.add("rotation_center_error", distance(*model.rotation_center, home), "mm");
+    r.add("rotation_distance", model.rotation_distance_mm, "mm");
+  } else {
+    r.add("rotation_center", std::string("not determined: the optical axes are too alike"));
+  }
+  r.add("glint_noise", noise.glint_px, "px");
+  r.add("glint_noise_from", settings.glint_noise_px ? std::string("given") : measured_from);
+  if (frames.spot_sigma_px > 0) {
+    r.add("glint_spot_sigma", frames.spot_sigma_px, "px");
+  } else {
+    r.add("glint_spot_sigma", std::string("estimated per frame (defocus or sized lights)"));
+  }
+  r.add("glint_sd_scale", noise.glint_sd_scale);
+  r.add("glint_sd_from", own_glint_sd ? "the detector's, scaled as " + measured_from
+                                      : std::string("none: every glint has glint_noise"));
+  r.add("pupil_noise", noise.pupil_px, "px");
+  r.add("pupil_noise_from", settings.pupil_noise_px ? std::string("given") : measured_from);
+  std::string warnings;
+  for (const std::string& w : model.warnings) warnings += (warnings.empty() ? "" : "; ") + w;
+  r.add("warnings", warnings.empty() ? std::string("none") : warnings);
+  return run;
+}
+
+// The test frames at head position `p` (`name`) by both methods, scored
+// against the truth: a row each in `csv`, each method's results and the
+// gaze map's panel into `out`.
+void score_position(const Scene& rig, const std::vector<Frame>& tests, std::size_t p, const std::string& name,
+                    const trackers::ModelGazeCalibration& model, const trackers::PolynomialGaze& polynomial,
+                    const trackers::FeatureNoise& noise, std::ostream& csv, CalibrationStudy& out) {
+  const Camera& camera = rig.cameras.front();
+  const Screen& screen = *rig.screen;
+  const Point3 nominal_cornea = rig.eyes.front().cornea_center();
+  Tally model_tally, polynomial_tally;
+  std::vector<double> lateral, depth;
+  int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
+  trackers::GazeMapPanel panel{name, {}, {{}, {}}};
+  for (const Frame& f : tests) {
+    if (f.position != static_cast<int>(p)) continue;
+    panel.targets.push_back(f.target);
+    const auto error_deg = [&](const ScreenPoint& p) {
+      return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
+    };
+    csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
+        << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
+    std::optional<ScreenPoint> by_model, by_polynomial;
+    if (f.found) {
+      const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
+                                                                  screen, nominal_cornea, noise);
+      // The cornea's error along the camera's line of sight (depth) and
+      // across it, on two fixed axes: the camera's x and y made
+      // perpendicular to the line of sight. Each is checked against its
+      // own s.d., as the screen's x and y are.
+      const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
+      const Vector3 camera_x = camera.world_from_camera() * Vector3{1, 0, 0};
+      const Vector3 across_x = (camera_x - dot(camera_x, sight) * sight) / (camera_x - dot(camera_x, sight) * sight).norm();
+      const Vector3 across_y = cross(sight, across_x);
+      const Vector3 e = g.cornea_center - f.cornea_center;
+      const auto variance_along = [&](const Vector3& d) {
+        double v = 0;
+        for (int a = 0; a < 3; ++a) {
+          for (int b = 0; b < 3; ++b) v += d[a] * g.cornea_covariance_mm2[3 * a + b] * d[b];
+        }
+        return v;
+      };
+      const double along = dot(e, sight);
+      const double across = (e - along * sight).norm();
+      const double depth_var = variance_along(sight);
+      if (g.cornea_determined) {
+        csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var) << ',' << dot(e, across_x) << ','
+            << dot(e, across_y) << ',' << std::sqrt(variance_along(across_x)) << ','
+            << std::sqrt(variance_along(across_y));
+      } else {
+        csv << ",,,,,,,";
+      }
+      if (g.cornea_determined) {
+        lateral.push_back(across);
+        depth.push_back(along);
+        ++cornea_with_sd;
+        depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
+        lateral_within += std::abs(dot(e, across_x)) <= 3 * std::sqrt(variance_along(across_x)) &&
+                                  std::abs(dot(e, across_y)) <= 3 * std::sqrt(variance_along(across_y))
+                              ? 1
+                              : 0;
+      }
+      if (g.valid && g.on_screen) {
+        by_model = g.on_screen;
+        model_tally.errors_deg.push_back(error_deg(*by_model));
+        csv << ',' << by_model->x_mm << ',' << by_model->y_mm;
+        if (g.on_screen_covariance_mm2) {
+          const double sx = std::sqrt((*g.on_screen_covariance_mm2)[0]);
+          const double sy = std::sqrt((*g.on_screen_covariance_mm2)[3]);
+          ++model_tally.with_sd;
+          model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
+          model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
+          csv << ',' << sx << ',' << sy;
+        } else {
+          csv << ",,";
+        }
+        csv << ',' << model_tally.errors_deg.back();
+      } else {
+        ++model_tally.missing;
+        csv << ",,,,,";
+      }
+      by_polynomial = polynomial.estimate(*f.found);
+    } else {
+      ++model_tally.missing;
+      csv << ",,,,,,,,,,,,";
+    }
+    if (by_polynomial) {
+      polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));
+      csv << ',' << by_polynomial->x_mm << ',' << by_polynomial->y_mm << ',' << polynomial_tally.errors_deg.back();
+    } else {
+      ++polynomial_tally.missing;
+      csv << ",,,";
+    }
+    csv << '\n';
+    panel.estimates[0].push_back(by_model);
+    panel.estimates[1].push_back(by_polynomial);
+  }
+  SimulationRun m{name, "model-based", {}, std::nullopt};
+  add_errors(m.results, "gaze_", model_tally);
+  if (!depth.empty()) {
+    double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
+    for (std::size_t i = 0; i < depth.size(); ++i) {
+      sum_lateral += lateral[i];
+      sum_depth += depth[i];
+      sum_depth2 += depth[i] * depth[i];
+    }
+    const double n = static_cast<double>(depth.size());
+    m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
+    m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
+    m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
+    m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
+    m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
+  }
+  out.runs.push_back(std::move(m));
+  SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};
+  add_errors(by_polynomial_run.results, "gaze_", polynomial_tally);
+  out.runs.push_back(std::move(by_polynomial_run));
+  out.panels.push_back(std::move(panel));
+}
+
 }  // namespace
 
 void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings) {
@@ -164,53 +454,14 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
   // Where the tracker expects the cornea (its nominal eye): every fit's
   // start, never the frame's truth.
   const Point3 nominal_cornea = rig.eyes.front().cornea_center();
-  // The tracker knows its rig, where the rig's lights put glints on the
-  // scene's eye, and an eye model: the scene eye's anterior cornea (or the
-  // one asked for) with one refracting surface, whose index is the eye's
-  // own behind a one-surface cornea and otherwise the keratometric 1.3375,
-  // which gives the anterior radius the whole cornea's power.
-  const EyeModel& scene_eye = rig.eyes.front().model();
-  trackers::GazeEyeModel nominal;
-  nominal.cornea_radius_mm =
-      settings.tracker_cornea ? (*settings.tracker_cornea)[0] : scene_eye.anterior_cornea.radius_mm;
-  nominal.cornea_asphericity =
-      settings.tracker_cornea ? (*settings.tracker_cornea)[1] : scene_eye.anterior_cornea.asphericity;
-  nominal.refractive_index = scene_eye.posterior_cornea ? 1.3375 : scene_eye.aqueous_index;
-  nominal.pupil_depth_mm = scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm;
-
+  const trackers::GazeEyeModel nominal = tracker_eye(rig, settings);
   std::vector<std::pair<std::string, Point3>> positions{{"home", home}};
   for (const std::array<double, 3>& m : settings.head_moves) {
     positions.push_back({"moved " + format(m[0]) + "," + format(m[1]) + "," + format(m[2]) + " mm",
                          home + Vector3{m[0], m[1], m[2]}});
   }
-  std::vector<Frame> calibration, tests, noise_frames;
-  double spot_sigma_px = 0;
-  std::uint64_t seed = settings.seed;
-  {
-    // The tracker knows its rig: the camera's optics (the spot's width, the
-    // sensor's noise) and where the lights put glints on the nominal eye.
-    const Tracker tracker(camera, rig.illuminators, rig.eyes.front());
-    spot_sigma_px = tracker.glint_settings().spot_sigma_px;
-    for (const ScreenPoint& t : screen.grid(settings.calibration_grid, settings.calibration_grid)) {
-      calibration.push_back(render_frame(rig, home, 0, t, tracker, seed++));
-      if (step) step();
-    }
-    for (std::size_t p = 0; p < positions.size(); ++p) {
-      for (const ScreenPoint& t : screen.grid(settings.grid, settings.grid)) {
-        tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, tracker, seed++));
-        if (step) step();
-      }
-    }
-    // Targets uniform over the screen, from the seed: the noise frames
-    // are neither calibration nor test frames.
-    std::mt19937_64 random(settings.seed);
-    std::uniform_real_distribution<double> along(0, 1);
-    for (int i = 0; i < settings.noise_frames; ++i) {
-      const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
-      noise_frames.push_back(render_frame(rig, home, 0, t, tracker, seed++));
-      if (step) step();
-    }
-  }
+  const RenderedFrames frames = render_frames(rig, positions, settings, step);
+  const std::vector<Frame>& calibration = frames.calibration;
 
   // Calibration on the frames whose features were all found.
   std::vector<trackers::GazeFeatures> features;
@@ -226,49 +477,8 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
     throw std::runtime_error("the detectors found glints and pupil in " + std::to_string(features.size()) + " of " +
                              std::to_string(calibration.size()) + " calibration frames: at least 6 are needed");
   }
-  // The detectors' noise: as given, or measured against the noise frames'
-  // labels, or the calibration frames' without noise frames (a simulator
-  // knows them; a tracker on real images would take its detectors'
-  // specification). The RMS error, clipped as the
-  // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
-  // so that a merged glint does not inflate it.
-  const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
-  const std::vector<Frame>& measured_on = noise_frames.empty() ? calibration : noise_frames;
-  const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given,
-                            double fallback) {
-    if (given) return *given;
-    std::vector<double> all;
-    for (const Frame& f : measured_on) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
-    double sd = INFINITY;
-    for (int round = 0; round < 20; ++round) {
-      double sum = 0;
-      std::size_t count = 0;
-      for (const double e : all) {
-        if (std::abs(e) <= clip * sd) sum += e * e, ++count;
-      }
-      const double next = count > 0 ? std::sqrt(sum / count) : fallback;
-      if (next == sd) break;
-      sd = next;
-    }
-    return std::max(1e-3, sd);
-  };
-  trackers::FeatureNoise noise{
-      measured(&Frame::glint_errors_px, settings.glint_noise_px, trackers::FeatureNoise{}.glint_px),
-      measured(&Frame::pupil_errors_px, settings.pupil_noise_px, trackers::FeatureNoise{}.pupil_px)};
-  // Glints that report their own standard deviation (saturated ones) keep
-  // it, scaled by the RMS of their errors over it, measured the same way;
-  // a given --glint-noise serves every glint.
-  const bool own_glint_sd =
-      !settings.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(),
-                                             [](const Frame& f) { return !f.glint_errors_sd.empty(); });
-  if (own_glint_sd) {
-    noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
-    // glint_px then serves only the glints without their own, where there are any.
-    if (std::any_of(measured_on.begin(), measured_on.end(),
-                    [](const Frame& f) { return !f.glint_errors_without_sd_px.empty(); })) {
-      noise.glint_px = measured(&Frame::glint_errors_without_sd_px, std::nullopt, noise.glint_px);
-    }
-  }
+  const MeasuredNoise measured = measure_noise(frames, settings);
+  const trackers::FeatureNoise& noise = measured.noise;
   trackers::ModelGazeCalibrationSettings model_settings;
   model_settings.fit_cornea_radius = settings.fit_radius;
   model_settings.fit_pupil_depth = settings.fit_pupil_depth;
@@ -284,66 +494,12 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
   }
 
   CalibrationStudy out;
-  std::vector<SimulationRun>& runs = out.runs;
-  {
-    SimulationRun run{"calibration", "model-based", {}, std::nullopt};
-    Results& r = run.results;
-    r.add("frames_used", static_cast<double>(features.size()));
-    r.add("frames_rendered", static_cast<double>(calibration.size()));
-    r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
-    r.add("kappa_vertical", model.model.kappa_vertical_rad / kDegree, "deg");
-    r.add("kappa_true_horizontal", rig.eyes.front().model().kappa_horizontal_rad / kDegree, "deg");
-    r.add("kappa_true_vertical", rig.eyes.front().model().kappa_vertical_rad / kDegree, "deg");
-    if (model.covariance.size() >= 4) {
-      r.add("kappa_horizontal_sd", std::sqrt(model.covariance[0]) / kDegree, "deg");
-      const int n = settings.fit_pupil_depth ? 3 : 2;
-      r.add("kappa_vertical_sd", std::sqrt(model.covariance[n + 1]) / kDegree, "deg");
-      if (settings.fit_pupil_depth) r.add("pupil_depth_sd", std::sqrt(model.covariance[8]), "mm");
-    }
-    r.add("pupil_depth", model.model.pupil_depth_mm, "mm");
-    r.add("pupil_depth_true", scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm, "mm");
-    r.add("cornea_radius", model.model.cornea_radius_mm, "mm");
-    if (settings.fit_radius) r.add("cornea_radius_sd", model.cornea_radius_sd_mm, "mm");
-    r.add("cornea_radius_true", scene_eye.anterior_cornea.radius_mm, "mm");
-    r.add("cornea_asphericity", nominal.cornea_asphericity);
-    r.add("cornea_asphericity_true", scene_eye.anterior_cornea.asphericity);
-    r.add("tracker_cornea_from", settings.tracker_cornea ? std::string("given") : std::string("the scene's eye"));
-    r.add("refractive_index", nominal.refractive_index);
-    r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
-    if (model.rotation_center) {
-      r.add("rotation_center", {model.rotation_center->x, model.rotation_center->y, model.rotation_center->z}, "mm");
-      r.add("rotation_center_sd",
-            {model.rotation_center_sd_mm[0], model.rotation_center_sd_mm[1], model.rotation_center_sd_mm[2]}, "mm");
-      r.add("rotation_center_error", distance(*model.rotation_center, home), "mm");
-      r.add("rotation_distance", model.rotation_distance_mm, "mm");
-    } else {
-      r.add("rotation_center", std::string("not determined: the optical axes are too alike"));
-    }
-    r.add("glint_noise", noise.glint_px, "px");
-    const std::string measured_from = noise_frames.empty()
-                                          ? std::string("measured on the calibration frames")
-                                          : "measured on " + std::to_string(noise_frames.size()) + " noise frames";
-    r.add("glint_noise_from", settings.glint_noise_px ? std::string("given") : measured_from);
-    if (spot_sigma_px > 0) {
-      r.add("glint_spot_sigma", spot_sigma_px, "px");
-    } else {
-      r.add("glint_spot_sigma", std::string("estimated per frame (defocus or sized lights)"));
-    }
-    r.add("glint_sd_scale", noise.glint_sd_scale);
-    r.add("glint_sd_from", own_glint_sd ? "the detector's, scaled as " + measured_from
-                                        : std::string("none: every glint has glint_noise"));
-    r.add("pupil_noise", noise.pupil_px, "px");
-    r.add("pupil_noise_from", settings.pupil_noise_px ? std::string("given") : measured_from);
-    std::string warnings;
-    for (const std::string& w : model.warnings) warnings += (warnings.empty() ? "" : "; ") + w;
-    r.add("warnings", warnings.empty() ? std::string("none") : warnings);
-    runs.push_back(std::move(run));
-  }
+  out.runs.push_back(model_calibration_run(rig, settings, nominal, model, features.size(), frames, measured));
   {
     SimulationRun run{"calibration", "polynomial", {}, std::nullopt};
     run.results.add("frames_used", static_cast<double>(features.size()));
     run.results.add("rms_residual_at_targets", polynomial.rms_residual_mm(), "mm");
-    runs.push_back(std::move(run));
+    out.runs.push_back(std::move(run));
   }
 
   // Every test frame by both methods, scored against the truth.
@@ -353,125 +509,15 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
          "cornea_depth_sd_mm,cornea_across_x_error_mm,cornea_across_y_error_mm,cornea_across_x_sd_mm,"
          "cornea_across_y_sd_mm,model_x_mm,model_y_mm,model_sd_x_mm,model_sd_y_mm,model_error_deg,polynomial_x_mm,"
          "polynomial_y_mm,polynomial_error_deg\n";
-  std::vector<trackers::GazeMapPanel>& panels = out.panels;
   try {
     for (std::size_t p = 0; p < positions.size(); ++p) {
-      const std::string& name = positions[p].first;
-      Tally model_tally, polynomial_tally;
-      std::vector<double> lateral, depth;
-      int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
-      trackers::GazeMapPanel panel{name, {}, {{}, {}}};
-      for (const Frame& f : tests) {
-        if (f.position != static_cast<int>(p)) continue;
-        panel.targets.push_back(f.target);
-        const auto error_deg = [&](const ScreenPoint& p) {
-          return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
-        };
-        csv << '"' << name << "\"," << f.target.x_mm << ',' << f.target.y_mm << ',' << f.glints_told << ','
-            << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
-        std::optional<ScreenPoint> by_model, by_polynomial;
-        if (f.found) {
-          const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
-                                                                      screen, nominal_cornea, noise);
-          // The cornea's error along the camera's line of sight (depth) and
-          // across it, on two fixed axes: the camera's x and y made
-          // perpendicular to the line of sight. Each is checked against its
-          // own s.d., as the screen's x and y are.
-          const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
-          const Vector3 camera_x = camera.world_from_camera() * Vector3{1, 0, 0};
-          const Vector3 across_x = (camera_x - dot(camera_x, sight) * sight) / (camera_x - dot(camera_x, sight) * sight).norm();
-          const Vector3 across_y = cross(sight, across_x);
-          const Vector3 e = g.cornea_center - f.cornea_center;
-          const auto variance_along = [&](const Vector3& d) {
-            double v = 0;
-            for (int a = 0; a < 3; ++a) {
-              for (int b = 0; b < 3; ++b) v += d[a] * g.cornea_covariance_mm2[3 * a + b] * d[b];
-            }
-            return v;
-          };
-          const double along = dot(e, sight);
-          const double across = (e - along * sight).norm();
-          const double depth_var = variance_along(sight);
-          if (g.cornea_determined) {
-            csv << ',' << across << ',' << along << ',' << std::sqrt(depth_var) << ',' << dot(e, across_x) << ','
-                << dot(e, across_y) << ',' << std::sqrt(variance_along(across_x)) << ','
-                << std::sqrt(variance_along(across_y));
-          } else {
-            csv << ",,,,,,,";
-          }
-          if (g.cornea_determined) {
-            lateral.push_back(across);
-            depth.push_back(along);
-            ++cornea_with_sd;
-            depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
-            lateral_within += std::abs(dot(e, across_x)) <= 3 * std::sqrt(variance_along(across_x)) &&
-                                      std::abs(dot(e, across_y)) <= 3 * std::sqrt(variance_along(across_y))
-                                  ? 1
-                                  : 0;
-          }
-          if (g.valid && g.on_screen) {
-            by_model = g.on_screen;
-            model_tally.errors_deg.push_back(error_deg(*by_model));
-            csv << ',' << by_model->x_mm << ',' << by_model->y_mm;
-            if (g.on_screen_covariance_mm2) {
-              const double sx = std::sqrt((*g.on_screen_covariance_mm2)[0]);
-              const double sy = std::sqrt((*g.on_screen_covariance_mm2)[3]);
-              ++model_tally.with_sd;
-              model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
-              model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
-              csv << ',' << sx << ',' << sy;
-            } else {
-              csv << ",,";
-            }
-            csv << ',' << model_tally.errors_deg.back();
-          } else {
-            ++model_tally.missing;
-            csv << ",,,,,";
-          }
-          by_polynomial = polynomial.estimate(*f.found);
-        } else {
-          ++model_tally.missing;
-          csv << ",,,,,,,,,,,,";
-        }
-        if (by_polynomial) {
-          polynomial_tally.errors_deg.push_back(error_deg(*by_polynomial));
-          csv << ',' << by_polynomial->x_mm << ',' << by_polynomial->y_mm << ',' << polynomial_tally.errors_deg.back();
-        } else {
-          ++polynomial_tally.missing;
-          csv << ",,,";
-        }
-        csv << '\n';
-        panel.estimates[0].push_back(by_model);
-        panel.estimates[1].push_back(by_polynomial);
-      }
-      SimulationRun m{name, "model-based", {}, std::nullopt};
-      add_errors(m.results, "gaze_", model_tally);
-      if (!depth.empty()) {
-        double sum_lateral = 0, sum_depth = 0, sum_depth2 = 0;
-        for (std::size_t i = 0; i < depth.size(); ++i) {
-          sum_lateral += lateral[i];
-          sum_depth += depth[i];
-          sum_depth2 += depth[i] * depth[i];
-        }
-        const double n = static_cast<double>(depth.size());
-        m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
-        m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
-        m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
-        m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
-        m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
-      }
-      runs.push_back(std::move(m));
-      SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};
-      add_errors(by_polynomial_run.results, "gaze_", polynomial_tally);
-      runs.push_back(std::move(by_polynomial_run));
-      panels.push_back(std::move(panel));
+      score_position(rig, frames.tests, p, positions[p].first, model, polynomial, noise, csv, out);
     }
   } catch (const std::exception& error) {
     throw std::runtime_error(std::string("while scoring: ") + error.what());
   }
   out.frames_csv = csv.str();
   return out;
-
 }
 
 }  // namespace purkinje::studies

@@ -294,6 +294,78 @@ TEST(Optimizer, AllowsAResidualFunctionToSolveItsOwnProblem) {
   EXPECT_NEAR(x[0], 8, 1e-9);
 }
 
+// Three unknowns, more residuals: the fixed-size normal matrix path (one
+// frame's cornea centre). The plane z = a + b x + c y through the corners
+// of the unit square, lifted by (+d, -d, -d, +d): that pattern is
+// orthogonal to the columns 1, x and y, so the least-squares plane is the
+// unlifted one, (1, 2, -3), and the cost 4 d^2 / 2.
+ResidualFunction lifted_plane(double d) {
+  return [d](const double* p, double* r, double* jacobian) {
+    const double xs[4] = {0, 1, 0, 1}, ys[4] = {0, 0, 1, 1}, lift[4] = {d, -d, -d, d};
+    for (int i = 0; i < 4; ++i) {
+      r[i] = p[0] + p[1] * xs[i] + p[2] * ys[i] - (1 + 2 * xs[i] - 3 * ys[i] + lift[i]);
+      if (jacobian != nullptr) {
+        jacobian[3 * i] = 1;
+        jacobian[3 * i + 1] = xs[i];
+        jacobian[3 * i + 2] = ys[i];
+      }
+    }
+    return true;
+  };
+}
+
+TEST(Optimizer, FitsThreeUnknownsToMoreResiduals) {
+  const ResidualFunction plane = lifted_plane(0.5);
+  expect_jacobian_matches_numeric(plane, 4, {0.2, -1, 4});
+  std::vector<double> x{0, 0, 0};
+  const optimizer::Summary summary = optimizer::solve(4, x, plane);
+  EXPECT_TRUE(summary.converged) << summary.message;
+  EXPECT_NEAR(x[0], 1, 1e-10);
+  EXPECT_NEAR(x[1], 2, 1e-10);
+  EXPECT_NEAR(x[2], -3, 1e-10);
+  EXPECT_NEAR(summary.final_cost, 0.5, 1e-12);
+}
+
+TEST(Optimizer, NestsThreeUnknownSolvesInEachOther) {
+  // Each outer evaluation fits the plane again (the same solver size,
+  // so the inner solve must get a solver of its own); the outer problem
+  // pulls x onto that plane's coefficients, with a fourth residual of 0.
+  int inner_solves = 0;
+  const ResidualFunction outer = [&](const double* x, double* r, double* jacobian) {
+    std::vector<double> plane{0, 0, 0};
+    if (!optimizer::solve(4, plane, lifted_plane(0.25)).converged) return false;
+    ++inner_solves;
+    for (int k = 0; k < 3; ++k) r[k] = x[k] - plane[k];
+    r[3] = 0;
+    if (jacobian != nullptr) {
+      std::fill_n(jacobian, 12, 0.0);
+      for (int k = 0; k < 3; ++k) jacobian[4 * k] = 1;  // row k, column k
+    }
+    return true;
+  };
+  std::vector<double> x{5, 5, 5};
+  const optimizer::Summary summary = optimizer::solve(4, x, outer);
+  EXPECT_TRUE(summary.converged) << summary.message;
+  EXPECT_GT(inner_solves, 1);
+  EXPECT_NEAR(x[0], 1, 1e-9);
+  EXPECT_NEAR(x[1], 2, 1e-9);
+  EXPECT_NEAR(x[2], -3, 1e-9);
+}
+
+TEST(Optimizer, ReportsAJacobianThatCannotBeEvaluatedWithThreeUnknowns) {
+  const ResidualFunction plane = lifted_plane(0.5);
+  int jacobian_requests = 0;
+  const ResidualFunction failing = [&](const double* x, double* r, double* jacobian) {
+    if (jacobian != nullptr && ++jacobian_requests > 1) return false;
+    return plane(x, r, jacobian);
+  };
+  std::vector<double> x{5, 5, 5};
+  const optimizer::Summary summary = optimizer::solve(4, x, failing);
+  EXPECT_FALSE(summary.converged);
+  EXPECT_NE(summary.message.find("Jacobian"), std::string::npos) << summary.message;
+  for (const double v : x) EXPECT_TRUE(std::isfinite(v));
+}
+
 TEST(Optimizer, RejectsEmptyProblemsByName) {
   std::vector<double> x{1};
   const ResidualFunction f = [](const double*, double*, double*) { return true; };

@@ -58,7 +58,10 @@ struct CalibrationStudy {
 // The study on a rig check_calibration_rig accepts, `step` called after
 // each rendered frame. Throws std::runtime_error when the detectors find
 // the features in fewer than six calibration frames or the model-based
-// calibration fails (with its warnings), and for failures while scoring.
+// calibration fails (with its warnings), and for failures while scoring
+// ("while scoring: ..."); what the renderer, the detectors and the
+// calibrations throw (std::invalid_argument for settings out of range)
+// passes through.
 CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& settings,
                                  const std::function<void()>& step = {});
 

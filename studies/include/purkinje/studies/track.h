@@ -26,7 +26,8 @@ struct TrackedSet {
 // tracker per camera of the rig, told its optics and which light makes
 // which glint on the rig's first eye. Throws std::runtime_error naming
 // an image whose pixels fail their labels' checks, or whose labels'
-// camera and lights are not the rig's (`rig_file` names the rig).
+// camera and lights are not the rig's (`rig_file` names the rig); what
+// the image reader, the detectors and the scorer throw passes through.
 TrackedSet track_images(const std::vector<LabelledImage>& images, const Scene* rig, const std::string& rig_file,
                         const trackers::ScoringSettings& settings, const std::function<void()>& step = {});
 

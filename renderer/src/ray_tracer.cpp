@@ -288,7 +288,13 @@ class PlacedMesh {
   UnitVector3 normal(unsigned triangle) const {
     const Triangle& v = triangles_[triangle];
     const Point3& p0 = vertices_[v[0]];
-    return UnitVector3::normalize(cross(vertices_[v[1]] - p0, vertices_[v[2]] - p0));
+    const UnitVector3 n = UnitVector3::normalize(cross(vertices_[v[1]] - p0, vertices_[v[2]] - p0));
+    // Zeros without a sign (-0 + 0 = +0): coplanar triangles' cross
+    // products can differ in a zero's sign, and which of two triangles
+    // sharing an edge Embree reports differs between its kernels; the
+    // normal AOV's bytes would follow (measured: remote_glasses, 40 pixels
+    // of -0 natively, +0 with isa=avx2).
+    return UnitVector3::from_normalized_unchecked(n.vector() + Vector3{0, 0, 0});
   }
 
   // Padded as PlacedSurface::world_bounds, so that the scene's bounds clip

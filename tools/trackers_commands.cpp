@@ -79,7 +79,8 @@ int write_outputs(const char* command, const ScoreOutput& request, const tracker
   std::vector<Overlay> overlays;
   try {
     for (const std::string& name : trackers::worst_images(score, request.overlays)) {
-      const auto it = std::find_if(images.begin(), images.end(), [&](const LabelledImage& i) { return i.name == name; });
+      const auto it =
+          std::find_if(images.begin(), images.end(), [&](const LabelledImage& i) { return i.name == name; });
       overlays.push_back({&*it, studies::read_pixels(*it)});
     }
   } catch (const std::exception& error) {
@@ -107,7 +108,8 @@ int write_outputs(const char* command, const ScoreOutput& request, const tracker
     return kOutputError;
   }
   std::cout << table << "\nwrote " << (dir / "score.txt").string() << ", score.csv, score.json"
-            << (with_detections ? ", detections.csv" : "") << " and " << overlays.size() << " overlays (the worst images)\n";
+            << (with_detections ? ", detections.csv" : "") << " and " << overlays.size()
+            << " overlays (the worst images)\n";
   return kOk;
 }
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "purkinje/models/check.h"
 #include "purkinje/models/rotation.h"
 
 namespace purkinje {
@@ -20,11 +21,11 @@ double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11)
 std::vector<EyeVariation> random_eye_variations(std::uint64_t seed, int count, const EyeVariationRange& range) {
   const auto fail = [](const std::string& what) { throw std::invalid_argument("EyeVariationRange: " + what); };
   if (!(range.max_gaze_turn_rad >= 0 && range.max_gaze_turn_rad <= std::numbers::pi / 2)) {
-    fail("max_gaze_turn_rad = " + std::to_string(range.max_gaze_turn_rad) + ": must be in [0, pi/2]");
+    fail("max_gaze_turn_rad = " + check::format_number(range.max_gaze_turn_rad) + ": must be in [0, pi/2]");
   }
   if (!(range.min_pupil_radius_mm > 0 && range.max_pupil_radius_mm >= range.min_pupil_radius_mm)) {
-    fail("min_pupil_radius_mm = " + std::to_string(range.min_pupil_radius_mm) + ", max_pupil_radius_mm = " +
-         std::to_string(range.max_pupil_radius_mm) + ": must satisfy 0 < min <= max");
+    fail("min_pupil_radius_mm = " + check::format_number(range.min_pupil_radius_mm) + ", max_pupil_radius_mm = " +
+         check::format_number(range.max_pupil_radius_mm) + ": must satisfy 0 < min <= max");
   }
   if (count < 0) throw std::invalid_argument("random_eye_variations: count = " + std::to_string(count) + ": must be >= 0");
   std::mt19937_64 rng(seed);
@@ -51,15 +52,15 @@ Scene with_eye_variation(const Scene& scene, const EyeVariation& v, int eye_inde
   const EyeModel& m = eye.model();
   const auto fail = [](const std::string& what) { throw std::invalid_argument("EyeVariation: " + what); };
   if (!std::isfinite(v.gaze_turn_rad) || !std::isfinite(v.turn_direction_rad)) {
-    fail("gaze_turn_rad = " + std::to_string(v.gaze_turn_rad) + ", turn_direction_rad = " +
-         std::to_string(v.turn_direction_rad) + ": must be finite");
+    fail("gaze_turn_rad = " + check::format_number(v.gaze_turn_rad) + ", turn_direction_rad = " +
+         check::format_number(v.turn_direction_rad) + ": must be finite");
   }
   // The scene file's rule: the pupil's edge, decentred, within the iris.
   const double decentration = std::hypot(m.pupil_decentration_x_mm, m.pupil_decentration_y_mm);
   if (!(v.pupil_radius_mm > 0 && v.pupil_radius_mm + decentration < m.iris_radius_mm)) {
-    fail("pupil_radius_mm = " + std::to_string(v.pupil_radius_mm) + ": must be > 0 and, with the pupil's " +
-         std::to_string(decentration) + " mm decentration, < the iris's radius (" +
-         std::to_string(m.iris_radius_mm) + " mm)");
+    fail("pupil_radius_mm = " + check::format_number(v.pupil_radius_mm) + ": must be > 0 and, with the pupil's " +
+         check::format_number(decentration) + " mm decentration, < the iris's radius (" +
+         check::format_number(m.iris_radius_mm) + " mm)");
   }
   const UnitVector3 gaze = eye.visual_axis();
   const UnitVector3 up = UnitVector3::normalize(eye.appearance().head_up.vector() -

@@ -41,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "purkinje/models/check.h"
 #include "purkinje/renderer/radiometry.h"
 
 namespace purkinje::renderer {
@@ -324,7 +325,7 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
   }
   if (!std::isfinite(radiant_intensity_w_sr) || radiant_intensity_w_sr < 0) {
     throw std::invalid_argument("IrisIrradianceCache: radiant_intensity_w_sr = " +
-                                std::to_string(radiant_intensity_w_sr) +
+                                check::format_number(radiant_intensity_w_sr) +
                                 ": must be finite and >= 0");
   }
   if (!light_position.is_finite()) {

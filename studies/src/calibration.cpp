@@ -60,8 +60,9 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
   renderer::RenderOptions options;
   options.seed = seed;
   const renderer::RenderResult result = renderer::render(scene, 0, options);
-  const trackers::GreyView image = trackers::grey_view(std::span<const std::uint16_t>(result.sensor.values), result.sensor.width,
-                                             result.sensor.height, result.sensor.bits);
+  const trackers::GreyView image =
+      trackers::grey_view(std::span<const std::uint16_t>(result.sensor.values), result.sensor.width,
+                          result.sensor.height, result.sensor.bits);
   const trackers::Detections found = tracker.track(image);
   const std::vector<trackers::Glint>& glints = found.glints;
   const trackers::PupilFound* pupil = found.pupils.empty() ? nullptr : &found.pupils.front();
@@ -221,9 +222,9 @@ MeasuredNoise measure_noise(const RenderedFrames& frames, const CalibrationSetti
   // Glints that report their own standard deviation (saturated ones) keep
   // it, scaled by the RMS of their errors over it, measured the same way;
   // a given --glint-noise serves every glint.
-  out.own_glint_sd = !settings.glint_noise_px && std::any_of(measured_on.begin(), measured_on.end(), [](const Frame& f) {
-    return !f.glint_errors_sd.empty();
-  });
+  out.own_glint_sd = !settings.glint_noise_px &&
+                     std::any_of(measured_on.begin(), measured_on.end(),
+                                 [](const Frame& f) { return !f.glint_errors_sd.empty(); });
   if (out.own_glint_sd) {
     noise.glint_sd_scale = measured(&Frame::glint_errors_sd, std::nullopt, 1.0);
     // glint_px then serves only the glints without their own, where there are any.
@@ -329,7 +330,8 @@ void score_position(const Scene& rig, const std::vector<Frame>& tests, std::size
       // own s.d., as the screen's x and y are.
       const Vector3 sight = (f.cornea_center - camera.center()) / (f.cornea_center - camera.center()).norm();
       const Vector3 camera_x = camera.world_from_camera() * Vector3{1, 0, 0};
-      const Vector3 across_x = (camera_x - dot(camera_x, sight) * sight) / (camera_x - dot(camera_x, sight) * sight).norm();
+      const Vector3 off_sight = camera_x - dot(camera_x, sight) * sight;
+      const Vector3 across_x = off_sight / off_sight.norm();
       const Vector3 across_y = cross(sight, across_x);
       const Vector3 e = g.cornea_center - f.cornea_center;
       const auto variance_along = [&](const Vector3& d) {

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "purkinje/models/check.h"
+
 namespace purkinje::studies {
 
 void Results::check_key(const std::string& key) const {
@@ -16,7 +18,7 @@ void Results::check_key(const std::string& key) const {
 void Results::add(const std::string& key, double value, const std::string& unit) {
   check_key(key);
   if (!std::isfinite(value)) {
-    throw std::invalid_argument("Results: \"" + key + "\" = " + std::to_string(value) + ": must be finite");
+    throw std::invalid_argument("Results: \"" + key + "\" = " + check::format_number(value) + ": must be finite");
   }
   entries_.push_back({key, value, unit});
 }
@@ -31,7 +33,7 @@ void Results::add(const std::string& key, const std::vector<double>& values, con
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i])) {
       throw std::invalid_argument("Results: \"" + key + "\"[" + std::to_string(i) + "] = " +
-                                  std::to_string(values[i]) + ": must be finite");
+                                  check::format_number(values[i]) + ": must be finite");
     }
   }
   entries_.push_back({key, values, unit});

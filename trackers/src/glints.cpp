@@ -13,6 +13,7 @@
 #include <string>
 
 #include "purkinje/models/camera_optics.h"
+#include "purkinje/models/check.h"
 #include "purkinje/models/optimizer.h"
 #include "purkinje/models/specular.h"
 #include "blobs.h"
@@ -305,9 +306,11 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
   if (s.background_radius_px < 1 || s.background_radius_px > 100) {
     fail("background_radius_px = " + std::to_string(s.background_radius_px) + ": must be in [1, 100]");
   }
-  if (!(s.threshold > 0 && s.threshold < 1)) fail("threshold = " + std::to_string(s.threshold) + ": must be in (0, 1)");
+  if (!(s.threshold > 0 && s.threshold < 1)) {
+    fail("threshold = " + check::format_number(s.threshold) + ": must be in (0, 1)");
+  }
   if (!(s.relative_threshold >= 0 && s.relative_threshold < 1)) {
-    fail("relative_threshold = " + std::to_string(s.relative_threshold) + ": must be in [0, 1)");
+    fail("relative_threshold = " + check::format_number(s.relative_threshold) + ": must be in [0, 1)");
   }
   if (s.min_area_px < 1 || s.max_area_px < s.min_area_px) {
     fail("min_area_px = " + std::to_string(s.min_area_px) + ", max_area_px = " + std::to_string(s.max_area_px) +
@@ -317,13 +320,13 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
     fail("centroid_margin_px = " + std::to_string(s.centroid_margin_px) + ": must be in [0, 20]");
   }
   if (!(s.spot_sigma_px == 0 || (s.spot_sigma_px >= 0.1 && s.spot_sigma_px <= 10))) {
-    fail("spot_sigma_px = " + std::to_string(s.spot_sigma_px) + ": must be 0 or in [0.1, 10]");
+    fail("spot_sigma_px = " + check::format_number(s.spot_sigma_px) + ": must be 0 or in [0.1, 10]");
   }
   if (!(s.full_scale_e > 0 && std::isfinite(s.full_scale_e))) {
-    fail("full_scale_e = " + std::to_string(s.full_scale_e) + ": must be positive and finite");
+    fail("full_scale_e = " + check::format_number(s.full_scale_e) + ": must be positive and finite");
   }
   if (!(s.read_noise_e >= 0 && std::isfinite(s.read_noise_e))) {
-    fail("read_noise_e = " + std::to_string(s.read_noise_e) + ": must be non-negative and finite");
+    fail("read_noise_e = " + check::format_number(s.read_noise_e) + ": must be non-negative and finite");
   }
 }
 
@@ -615,12 +618,12 @@ std::complex<double> complex_of(const Pixel& p) { return {p.u, p.v}; }
 void identify_glints(std::vector<Glint>& glints, const std::vector<std::optional<Pixel>>& expected,
                      const GlintMatchSettings& s) {
   const auto fail = [](const std::string& what) { throw std::invalid_argument("GlintMatchSettings: " + what); };
-  if (!(s.max_scale >= 1)) fail("max_scale = " + std::to_string(s.max_scale) + ": must be >= 1");
+  if (!(s.max_scale >= 1)) fail("max_scale = " + check::format_number(s.max_scale) + ": must be >= 1");
   if (!(s.max_rotation_rad >= 0 && s.max_rotation_rad <= std::numbers::pi)) {
-    fail("max_rotation_rad = " + std::to_string(s.max_rotation_rad) + ": must be in [0, pi]");
+    fail("max_rotation_rad = " + check::format_number(s.max_rotation_rad) + ": must be in [0, pi]");
   }
   if (!(s.gate_fraction > 0 && s.gate_fraction < 0.5)) {
-    fail("gate_fraction = " + std::to_string(s.gate_fraction) + ": must be in (0, 0.5)");
+    fail("gate_fraction = " + check::format_number(s.gate_fraction) + ": must be in (0, 0.5)");
   }
   for (Glint& g : glints) g.illuminator = -1;
   std::vector<int> lights;

@@ -33,15 +33,8 @@ using studies::LabelledImage;
 // The labelled images the inputs name, with a progress line; notes on
 // files left out go to stderr.
 std::vector<LabelledImage> read_labels(const std::vector<std::string>& inputs, bool quiet) {
-  std::vector<std::string> notes;
-  std::vector<fs::path> files;
-  try {
-    files = studies::labels_files(inputs, notes);
-  } catch (...) {
-    for (const std::string& note : notes) std::cerr << note << "\n";  // of the inputs before the bad one
-    throw;
-  }
-  for (const std::string& note : notes) std::cerr << note << "\n";
+  const std::vector<fs::path> files =
+      studies::labels_files(inputs, [](const std::string& note) { std::cerr << note << "\n"; });
   Progress progress("reading labels", files.size(), quiet);
   return studies::read_labelled_images(files, [&] { progress.step(); });
 }

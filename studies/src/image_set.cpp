@@ -11,7 +11,8 @@ namespace purkinje::studies {
 
 namespace fs = std::filesystem;
 
-std::vector<fs::path> labels_files(const std::vector<std::string>& inputs, std::vector<std::string>& notes) {
+std::vector<fs::path> labels_files(const std::vector<std::string>& inputs,
+                                  const std::function<void(const std::string&)>& note) {
   std::vector<fs::path> files;
   for (const std::string& input : inputs) {
     const fs::path path(input);
@@ -38,9 +39,8 @@ std::vector<fs::path> labels_files(const std::vector<std::string>& inputs, std::
       }
       if (!left_out.empty()) {
         std::sort(left_out.begin(), left_out.end());
-        notes.push_back(input + ": " + std::to_string(left_out.size()) +
-                        " .json files without an image beside them left out (" + left_out.front() +
-                        (left_out.size() > 1 ? ", ..." : "") + ")");
+        note(input + ": " + std::to_string(left_out.size()) + " .json files without an image beside them left out (" +
+             left_out.front() + (left_out.size() > 1 ? ", ..." : "") + ")");
       }
       std::sort(in_folder.begin(), in_folder.end());
       files.insert(files.end(), in_folder.begin(), in_folder.end());

@@ -21,11 +21,11 @@ struct LabelledImage {
 // The labels files the inputs name: a labels file itself, an image beside
 // its labels (same name, .json), or a folder (its .json files that have an
 // image of the same name beside them, in order: a score.json or any other
-// JSON file in the folder is no image's labels). `notes` gets a line per
-// folder with JSON files left out so. Throws std::runtime_error for a
-// folder without labels files.
+// JSON file in the folder is no image's labels). `note` is told a line,
+// as each folder is read, for its JSON files left out so. Throws
+// std::runtime_error for a folder without labels files.
 std::vector<std::filesystem::path> labels_files(const std::vector<std::string>& inputs,
-                                                std::vector<std::string>& notes);
+                                                const std::function<void(const std::string&)>& note);
 
 // Each labels file read, in order, `step` called after each. Throws
 // std::runtime_error naming the file for labels that cannot be read, an

@@ -13,6 +13,9 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <system_error>
+#include <set>
 
 namespace purkinje {
 
@@ -81,7 +84,7 @@ std::filesystem::path create_temporary(const std::filesystem::path& target) {
     }
     if (slot) slot->state.store(0);  // not ours: another process's file, or none
     if (errno != EEXIST || attempt > 100) {
-      throw std::runtime_error(target.string() + ": cannot create a temporary file: " + std::strerror(errno));
+      throw OutputError(target.string() + ": cannot create a temporary file: " + std::strerror(errno));
     }
   }
 }
@@ -169,46 +172,190 @@ std::string unreplaceable(const std::filesystem::path& file) {
   return "is not a regular file: not replaced";
 }
 
-void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
-  auto fail = [&file](const std::string& what, int error) {
-    throw std::runtime_error(file.string() + ": " + what + ": " + std::strerror(error));
-  };
-  if (const std::string why = unreplaceable(file); !why.empty()) throw std::runtime_error(file.string() + ": " + why);
+namespace {
 
-  const std::filesystem::path directory = file.has_parent_path() ? file.parent_path() : ".";
-  const std::filesystem::path temporary = create_temporary(file);
-  int fd = ::open(temporary.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-  auto abandon = [&](const std::string& what) {
-    const int error = errno;
-    if (fd >= 0) ::close(fd);
-    ::unlink(temporary.c_str());
-    release_temporary(temporary);
-    fail(what, error);
-  };
-  if (fd < 0) abandon("cannot open a temporary file");
-  const char* data = contents.data();
-  std::size_t left = contents.size();
-  while (left > 0) {
-    const ssize_t written = ::write(fd, data, left);
+std::string errno_message(int error) { return std::generic_category().message(error); }
+
+[[noreturn]] void fail(const std::filesystem::path& file, const std::string& reason) {
+  throw OutputError(file.string() + ": " + reason);
+}
+
+// Writes all of `bytes` to an open descriptor; false with errno set when
+// the system refuses.
+bool write_all(int fd, std::string_view bytes) {
+  while (!bytes.empty()) {
+    const ssize_t written = ::write(fd, bytes.data(), bytes.size());
     if (written < 0) {
       if (errno == EINTR) continue;
-      abandon("cannot write");
+      return false;
     }
-    data += written;
-    left -= static_cast<std::size_t>(written);
+    bytes.remove_prefix(static_cast<std::size_t>(written));
   }
-  if (::fsync(fd) != 0) abandon("cannot flush to disk");
-  const int closed = ::close(fd);
-  fd = -1;
-  if (closed != 0) abandon("cannot close");
-  stop_point("temporary_written");
-  if (::rename(temporary.c_str(), file.c_str()) != 0) abandon("cannot replace");
-  release_temporary(temporary);
-  // Make the rename itself durable; a failure here loses nothing written.
-  if (const int dir = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
+  return true;
+}
+
+}  // namespace
+
+void write_bytes(const std::filesystem::path& file, std::string_view bytes) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) fail(file, "cannot write: " + errno_message(errno));
+  auto abandon = [&](int error) {
+    ::unlink(file.c_str());
+    fail(file, "cannot write: " + errno_message(error));
+  };
+  if (!write_all(fd, bytes)) {
+    const int error = errno;
+    ::close(fd);
+    abandon(error);
   }
+  // close() reports delayed write errors on some file systems (NFS).
+  if (::close(fd) != 0) abandon(errno);
+}
+
+void append_to_file(const std::filesystem::path& file, std::string_view line) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd < 0) fail(file, std::string("cannot append: ") + errno_message(errno));
+  if (!write_all(fd, line) || ::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail(file, "cannot append: " + errno_message(error));
+  }
+  ::close(fd);
+}
+
+namespace {
+
+std::filesystem::path directory_of(const std::filesystem::path& target) {
+  return target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+}
+
+std::string directory_label(const std::filesystem::path& directory) {
+  std::string label = directory.string();
+  if (label.empty() || label.back() != '/') label += '/';
+  return label;
+}
+
+void check_directory(const std::filesystem::path& target) {
+  const std::filesystem::path directory = directory_of(target);
+  std::error_code error;
+  const auto status = std::filesystem::status(directory, error);
+  const std::string folder = "cannot write: the folder " + directory_label(directory);
+  if (status.type() == std::filesystem::file_type::not_found) fail(target, folder + " does not exist");
+  if (error) fail(target, folder + " cannot be reached: " + error.message());
+  if (status.type() != std::filesystem::file_type::directory) fail(target, folder + " is not a folder");
+}
+
+// Flushes a finished temporary to the disk: a full or failing device may
+// only report at this point.
+void flush_to_disk(const std::filesystem::path& temporary, const std::filesystem::path& target) {
+  struct stat info {};
+  if (::stat(temporary.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
+    fail(target, "the writer left no file");
+  const int fd = ::open(temporary.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(target, "cannot write: " + errno_message(errno));
+  if (::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail(target, "cannot write: " + errno_message(error));
+  }
+  ::close(fd);
+}
+
+// A writer's message names the temporary, which means nothing to the
+// user; the target is named instead.
+std::string reason_from(const std::string& what, const std::filesystem::path& temporary) {
+  const std::string prefix = temporary.string() + ": ";
+  if (what.compare(0, prefix.size(), prefix) == 0) return what.substr(prefix.size());
+  return what;
+}
+
+}  // namespace
+
+const std::filesystem::path& FileSet::temporary_of(const std::filesystem::path& target) const {
+  for (std::size_t i = 0; i < written_.size(); ++i) {
+    if (entries_[i].target == target) return written_[i];
+  }
+  throw std::logic_error("FileSet::temporary_of: " + target.string() + " is not written yet");
+}
+
+void FileSet::add(std::filesystem::path target, Writer writer) {
+  if (!target.has_filename())
+    throw std::invalid_argument("FileSet: target \"" + target.string() + "\" names no file");
+  if (!writer) throw std::invalid_argument("FileSet: " + target.string() + ": no writer");
+  for (const Entry& e : entries_) {
+    if (e.target.lexically_normal() == target.lexically_normal())
+      throw std::invalid_argument("FileSet: " + target.string() + " added twice");
+  }
+  entries_.push_back({std::move(target), std::move(writer)});
+}
+
+void FileSet::commit() {
+  for (const Entry& e : entries_) {
+    check_directory(e.target);
+    if (const std::string why = unreplaceable(e.target); !why.empty()) fail(e.target, why);
+  }
+
+  std::vector<std::filesystem::path> temporaries;
+  std::vector<std::filesystem::path> renamed;
+  auto roll_back = [&] {
+    for (const auto& t : temporaries) {
+      ::unlink(t.c_str());
+      release_temporary(t);
+    }
+    for (const auto& t : renamed) ::unlink(t.c_str());
+  };
+
+  try {
+    temporaries.reserve(entries_.size());
+    for (const Entry& e : entries_) {
+      try {
+        temporaries.push_back(create_temporary(e.target));
+      } catch (const std::exception& error) {
+        fail(e.target, reason_from(error.what(), e.target));
+      }
+      const std::filesystem::path& temporary = temporaries.back();
+      try {
+        e.writer(temporary);
+      } catch (const std::exception& error) {
+        fail(e.target, reason_from(error.what(), temporary));
+      } catch (...) {
+        fail(e.target, "the writer failed with an unknown exception");
+      }
+      flush_to_disk(temporary, e.target);
+      written_.push_back(temporary);
+      stop_point("temporary_written");
+    }
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+      if (::rename(temporaries[i].c_str(), entries_[i].target.c_str()) != 0)
+        fail(entries_[i].target, "cannot rename into place: " + errno_message(errno));
+      release_temporary(temporaries[i]);
+      renamed.push_back(entries_[i].target);
+      stop_point("renamed");
+    }
+  } catch (...) {
+    written_.clear();
+    roll_back();
+    throw;
+  }
+  written_.clear();
+
+  // Make the renames durable. The set is complete and in place by now, so
+  // a failure here is not reported: there is nothing left to undo.
+  std::set<std::filesystem::path> directories;
+  for (const Entry& e : entries_) directories.insert(directory_of(e.target));
+  for (const auto& directory : directories) {
+    const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd >= 0) {
+      ::fsync(fd);
+      ::close(fd);
+    }
+  }
+}
+
+void write_file_atomically(const std::filesystem::path& file, const std::string& contents) {
+  FileSet set;
+  set.add(file, [&contents](const std::filesystem::path& temporary) { write_bytes(temporary, contents); });
+  set.commit();
 }
 
 }  // namespace purkinje

@@ -5,19 +5,15 @@
 // writes reliably. Measured with a 4 kB file-size limit: an EXR cut short
 // at its final flush returns true from open, write_image and close with
 // no error at all; the PNG writer returns true as well and leaves the
-// failure only in geterror(). Writing the bytes here also lets the error
-// name the file and errno's reason exactly.
+// failure only in geterror(). Writing the bytes with models' write_bytes
+// also lets the error name the file and errno's reason exactly.
 
 #include "purkinje/renderer/image_io.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <atomic>
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <memory>
@@ -25,15 +21,13 @@
 #include <set>
 #include <stdexcept>
 #include <string>
-#include <system_error>
+#include <string_view>
 #include <utility>
 
 #include "purkinje/models/output_file.h"
 
 namespace purkinje::renderer {
 namespace {
-
-std::string errno_message(int error) { return std::generic_category().message(error); }
 
 // Debian's OpenImageIO is built without NDEBUG, so it prints "OIIO DEBUG"
 // lines by default, one of them on every EXR write below (for the date we
@@ -50,30 +44,6 @@ void quiet_openimageio() {
   message += ": ";
   message += reason;
   throw OutputError(message);
-}
-
-// Writes the whole buffer or removes what it wrote and throws.
-void write_bytes(const std::filesystem::path& file, const std::vector<unsigned char>& bytes) {
-  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) fail(file, "cannot write: " + errno_message(errno));
-  auto abandon = [&](int error, bool open) {
-    if (open) ::close(fd);
-    ::unlink(file.c_str());
-    fail(file, "cannot write: " + errno_message(error));
-  };
-  const unsigned char* data = bytes.data();
-  std::size_t left = bytes.size();
-  while (left > 0) {
-    const ssize_t written = ::write(fd, data, left);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      abandon(errno, true);
-    }
-    data += written;
-    left -= static_cast<std::size_t>(written);
-  }
-  // close() reports delayed write errors on some file systems (NFS).
-  if (::close(fd) != 0) abandon(errno, false);
 }
 
 // Encodes one image with the named OIIO writer ("png", "openexr") into
@@ -186,7 +156,7 @@ void write_png(const std::filesystem::path& file, const SensorImage& image) {
       wide[i] = static_cast<unsigned short>(image.values[i] << shift);
     bytes = encode("png", file, spec, OIIO::TypeDesc::UINT16, wide.data());
   }
-  write_bytes(file, bytes);
+  write_bytes(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>& planes) {
@@ -214,7 +184,8 @@ void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>&
     const std::vector<float>& values = planes[c].plane.values;
     for (std::size_t i = 0; i < pixels; ++i) interleaved[i * channels + c] = values[i];
   }
-  write_bytes(file, encode("openexr", file, spec, OIIO::TypeDesc::FLOAT, interleaved.data()));
+  const std::vector<unsigned char> bytes = encode("openexr", file, spec, OIIO::TypeDesc::FLOAT, interleaved.data());
+  write_bytes(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 SensorImage read_png(const std::filesystem::path& file) {
@@ -266,138 +237,6 @@ std::vector<NamedPlane> read_exr(const std::filesystem::path& file) {
       planes[c].plane.values[i] = interleaved[i * channels + c];
   }
   return planes;
-}
-
-// ---------------------------------------------------------------------------
-
-namespace {
-
-std::filesystem::path directory_of(const std::filesystem::path& target) {
-  return target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
-}
-
-std::string directory_label(const std::filesystem::path& directory) {
-  std::string label = directory.string();
-  if (label.empty() || label.back() != '/') label += '/';
-  return label;
-}
-
-void check_directory(const std::filesystem::path& target) {
-  const std::filesystem::path directory = directory_of(target);
-  std::error_code error;
-  const auto status = std::filesystem::status(directory, error);
-  if (status.type() == std::filesystem::file_type::not_found)
-    throw OutputError(directory_label(directory) + ": directory does not exist");
-  if (error) throw OutputError(directory_label(directory) + ": cannot access: " + error.message());
-  if (status.type() != std::filesystem::file_type::directory)
-    throw OutputError(directory_label(directory) + ": not a directory");
-}
-
-// Flushes a finished temporary to the disk: a full or failing device may
-// only report at this point.
-void flush_to_disk(const std::filesystem::path& temporary, const std::filesystem::path& target) {
-  struct stat info {};
-  if (::stat(temporary.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
-    fail(target, "the writer left no file");
-  const int fd = ::open(temporary.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) fail(target, "cannot write: " + errno_message(errno));
-  if (::fsync(fd) != 0) {
-    const int error = errno;
-    ::close(fd);
-    fail(target, "cannot write: " + errno_message(error));
-  }
-  ::close(fd);
-}
-
-// A writer's message names the temporary, which means nothing to the
-// user; the target is named instead.
-std::string reason_from(const std::string& what, const std::filesystem::path& temporary) {
-  const std::string prefix = temporary.string() + ": ";
-  if (what.compare(0, prefix.size(), prefix) == 0) return what.substr(prefix.size());
-  return what;
-}
-
-}  // namespace
-
-const std::filesystem::path& FileSet::temporary_of(const std::filesystem::path& target) const {
-  for (std::size_t i = 0; i < written_.size(); ++i) {
-    if (entries_[i].target == target) return written_[i];
-  }
-  throw std::logic_error("FileSet::temporary_of: " + target.string() + " is not written yet");
-}
-
-void FileSet::add(std::filesystem::path target, Writer writer) {
-  if (!target.has_filename())
-    throw std::invalid_argument("FileSet: target \"" + target.string() + "\" names no file");
-  if (!writer) throw std::invalid_argument("FileSet: " + target.string() + ": no writer");
-  for (const Entry& e : entries_) {
-    if (e.target.lexically_normal() == target.lexically_normal())
-      throw std::invalid_argument("FileSet: " + target.string() + " added twice");
-  }
-  entries_.push_back({std::move(target), std::move(writer)});
-}
-
-void FileSet::commit() {
-  for (const Entry& e : entries_) {
-    check_directory(e.target);
-    if (const std::string why = unreplaceable(e.target); !why.empty()) fail(e.target, why);
-  }
-
-  std::vector<std::filesystem::path> temporaries;
-  std::vector<std::filesystem::path> renamed;
-  auto roll_back = [&] {
-    for (const auto& t : temporaries) {
-      ::unlink(t.c_str());
-      release_temporary(t);
-    }
-    for (const auto& t : renamed) ::unlink(t.c_str());
-  };
-
-  try {
-    temporaries.reserve(entries_.size());
-    for (const Entry& e : entries_) {
-      try {
-        temporaries.push_back(create_temporary(e.target));
-      } catch (const std::exception& error) {
-        fail(e.target, reason_from(error.what(), e.target));
-      }
-      const std::filesystem::path& temporary = temporaries.back();
-      try {
-        e.writer(temporary);
-      } catch (const std::exception& error) {
-        fail(e.target, reason_from(error.what(), temporary));
-      } catch (...) {
-        fail(e.target, "the writer failed with an unknown exception");
-      }
-      flush_to_disk(temporary, e.target);
-      written_.push_back(temporary);
-      stop_point("temporary_written");
-    }
-    for (std::size_t i = 0; i < entries_.size(); ++i) {
-      if (::rename(temporaries[i].c_str(), entries_[i].target.c_str()) != 0)
-        fail(entries_[i].target, "cannot rename into place: " + errno_message(errno));
-      release_temporary(temporaries[i]);
-      renamed.push_back(entries_[i].target);
-      stop_point("renamed");
-    }
-  } catch (...) {
-    written_.clear();
-    roll_back();
-    throw;
-  }
-  written_.clear();
-
-  // Make the renames durable. The set is complete and in place by now, so
-  // a failure here is not reported: there is nothing left to undo.
-  std::set<std::filesystem::path> directories;
-  for (const Entry& e : entries_) directories.insert(directory_of(e.target));
-  for (const auto& directory : directories) {
-    const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd >= 0) {
-      ::fsync(fd);
-      ::close(fd);
-    }
-  }
 }
 
 }  // namespace purkinje::renderer

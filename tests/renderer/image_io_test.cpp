@@ -370,8 +370,8 @@ TEST(FileSet, MissingDirectoryIsNamedAndNothingIsWritten) {
     write_text(t, "x");
   });
   set.add(dir / "missing" / "image.png", [&](const fs::path& t) { write_text(t, "x"); });
-  EXPECT_EQ(message_of_output_error(set),
-            (dir / "missing").string() + "/: directory does not exist");
+  EXPECT_EQ(message_of_output_error(set), (dir / "missing" / "image.png").string() + ": cannot write: the folder " +
+                                             (dir / "missing").string() + "/ does not exist");
   EXPECT_FALSE(ran);
   EXPECT_TRUE(dir.entries().empty());
 }
@@ -382,7 +382,8 @@ TEST(FileSet, ParentThatIsARegularFileFails) {
   write_text(dir / "plain", "a file, not a folder");
   FileSet set;
   set.add(dir / "plain" / "image.png", [](const fs::path& t) { write_text(t, "x"); });
-  EXPECT_EQ(message_of_output_error(set), (dir / "plain").string() + "/: not a directory");
+  EXPECT_EQ(message_of_output_error(set), (dir / "plain" / "image.png").string() + ": cannot write: the folder " +
+                                             (dir / "plain").string() + "/ is not a folder");
   EXPECT_EQ(dir.entries(), (std::vector<std::string>{"plain"}));
 }
 

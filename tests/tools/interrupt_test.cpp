@@ -118,15 +118,16 @@ class Interrupted : public ::testing::Test {
 fs::path* Interrupted::root_ = nullptr;
 std::map<std::string, std::string>* Interrupted::reference_ = nullptr;
 
-// Renames: 3 per variation (PNG, EXR, labels last); rename 88 is the 30th
-// unit's PNG. temporary_written counts the index's first write too.
+// Renames: the index's first write, then 3 per variation (PNG, EXR,
+// labels last); rename 89 is the 30th unit's PNG. temporary_written
+// counts the index's first write too.
 const char* const kStopPoints[] = {
-    "renamed:1",              // between the first unit's PNG and EXR
-    "renamed:2",              // between its EXR and labels
+    "renamed:2",              // between the first unit's PNG and EXR
+    "renamed:3",              // between its EXR and labels
     "temporary_written:40",   // a unit's files written, none renamed
     "unit_written:17",        // a unit in place, its index line not yet
-    "renamed:88",             // between a later unit's PNG and EXR
-    "renamed:150"};           // every unit in place, the index not yet whole
+    "renamed:89",             // between a later unit's PNG and EXR
+    "renamed:151"};           // every unit in place, the index not yet whole
 
 // All six unless PURKINJE_KILL_POINTS says fewer: .ci/run lowers it for the
 // sanitizer and coverage builds, which check the code, not the bar.
@@ -147,7 +148,7 @@ TEST_F(Interrupted, SigtermAtSixPointsRemovesTemporariesAndResumeGivesTheBytesOf
 TEST_F(Interrupted, AHalfReplacedUnitIsToldByItsLabelsChecks) {
   const fs::path dir = *root_ / "mixed";
   ASSERT_EQ(render_set(dir, "--seed 1000").code, 0);
-  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=renamed:1:KILL").signal, SIGKILL);
+  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=renamed:2:KILL").signal, SIGKILL);
   const std::string track = "'" + kExecutable.string() + "' track '" + (dir / "tiny_v0000_cam0.json").string() +
                             "' -o '" + (*root_ / "mixed_track").string() + "' > /dev/null 2>'" +
                             (*root_ / "track_err.txt").string() + "'";
@@ -196,9 +197,9 @@ TEST_F(Interrupted, ResumeKeepsTheCompleteUnits) {
 // folder), and an index whose last line a kill cut short: resumed twice.
 TEST_F(Interrupted, ResumeWithoutAnIndexOrAfterACutLine) {
   const fs::path dir = *root_ / "no_index";
-  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=renamed:30:KILL").signal, SIGKILL);
+  EXPECT_EQ(render_set(dir, "", "PURKINJE_STOP_AT=renamed:31:KILL").signal, SIGKILL);
   fs::remove(dir / "variations.csv");
-  EXPECT_EQ(render_set(dir, "--resume", "PURKINJE_STOP_AT=renamed:30:KILL").signal, SIGKILL);
+  EXPECT_EQ(render_set(dir, "--resume", "PURKINJE_STOP_AT=renamed:31:KILL").signal, SIGKILL);
   std::string index = read(dir / "variations.csv");
   ASSERT_GT(index.size(), 10u);
   std::ofstream(dir / "variations.csv", std::ios::binary | std::ios::trunc) << index.substr(0, index.size() - 5);

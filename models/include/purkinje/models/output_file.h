@@ -7,18 +7,67 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace purkinje {
 
+// An output could not be written; what() names the file and the reason.
+// What a caller tells apart from bad input (the command line's exit code 3).
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // Writes `contents` to a temporary file in the same directory, flushes it
 // to disk and renames it over `file`, so readers see the old file or the
-// whole new one, never a part. Throws std::runtime_error naming the path
+// whole new one, never a part. Throws OutputError naming the path
 // and the system's reason; no temporary file is left behind. Refuses
 // (before writing anything) a `file` that unreplaceable() names.
 void write_file_atomically(const std::filesystem::path& file, const std::string& contents);
+
+// Writes several files all-or-nothing. Add each file with the function that
+// writes it to a given (temporary) path; commit() runs them all to
+// temporaries, then renames each into place. On any failure it removes
+// every temporary (and any file it already renamed) and throws
+// OutputError naming the target file and the reason.
+class FileSet {
+ public:
+  FileSet() = default;
+  // Writers may hold the set (temporary_of): it stays where it was made.
+  FileSet(const FileSet&) = delete;
+  FileSet& operator=(const FileSet&) = delete;
+  using Writer = std::function<void(const std::filesystem::path& temporary)>;
+  void add(std::filesystem::path target, Writer writer);
+  // Runs the writers in the order added, then renames in that order: a
+  // file added last is in place only when all the others are.
+  void commit();
+  // During commit(), for a writer: the temporary of a target added before
+  // it, already written and flushed (labels record their images'
+  // checksums from them). Throws std::logic_error otherwise.
+  const std::filesystem::path& temporary_of(const std::filesystem::path& target) const;
+
+ private:
+  struct Entry {
+    std::filesystem::path target;
+    Writer writer;
+  };
+  std::vector<Entry> entries_;
+  std::vector<std::filesystem::path> written_;  // during commit(): the temporaries written so far
+};
+
+// The bytes into `file` (created or truncated): a FileSet's writer. On
+// failure removes what it wrote and throws OutputError naming `file` and
+// the system's reason.
+void write_bytes(const std::filesystem::path& file, std::string_view bytes);
+
+// Appends `line` to an existing file and flushes it to the disk (an index
+// that grows as a long run goes). Throws OutputError naming the file.
+void append_to_file(const std::filesystem::path& file, std::string_view line);
 
 // Why an output may not be renamed over `file`: it exists and is not a
 // regular file ("is a character device", for /dev/full; a FIFO, socket,

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "purkinje/models/output_file.h"
 #include "purkinje/models/scene.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/renderer/image.h"
@@ -115,7 +116,6 @@ void render(const Scene& scene, int camera, const RenderOptions& options, Render
 struct RenderFiles {
   std::filesystem::path image, exr, labels;
 };
-class FileSet;
 // Adds <dir>/<stem>.png, .exr and .json to `files` (copying what they
 // need), so that several images can be committed all-or-nothing together.
 RenderFiles add_render(FileSet& files, const std::filesystem::path& dir, const std::string& stem,

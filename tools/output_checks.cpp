@@ -1,6 +1,5 @@
 #include "output_checks.h"
 
-#include "commands.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 

@@ -12,6 +12,9 @@
 
 namespace purkinje::tools {
 
+// The command line's exit codes (docs/cli.md).
+enum ExitCode : int { kOk = 0, kBadInput = 1, kUsageError = 2, kOutputError = 3 };
+
 struct Refusal {
   int exit_code;        // kUsageError: an output is an input; kOutputError: it cannot be written
   std::string message;  // names the option, the path and the rule

@@ -16,7 +16,7 @@
 #include <span>
 #include <vector>
 
-#include "../../renderer/src/surfaces.h"
+#include "surfaces.h"  // the renderer's private header (purkinje::renderer_internal)
 #include "embree_isa.h"
 #include "purkinje/models/scene_file.h"
 

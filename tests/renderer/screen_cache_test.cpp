@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "../../renderer/src/screen_cache.h"
+#include "screen_cache.h"  // the renderer's private header (purkinje::renderer_internal)
 
 namespace purkinje::renderer {
 namespace {

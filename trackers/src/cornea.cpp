@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -166,11 +167,15 @@ double CorneaFit::radius_sd_mm() const {
 
 namespace {
 
-CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
-                   const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
-                   const CorneaFitSettings& s, const std::vector<UnitVector3>& axes) {
-  const int frames = static_cast<int>(starts.size());
-  if (frames == 0) throw std::invalid_argument("fit_cornea: no frames (starts is empty)");
+// How many glints each frame has and which cameras see them; throws for a
+// glint naming a frame, camera or light that is not there, or a bad s.d.
+struct GlintCounts {
+  std::vector<int> per_frame;
+  std::vector<int> cameras_used;
+};
+
+GlintCounts count_glints(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                         const std::vector<GlintObservation>& glints, int frames) {
   std::vector<int> per_frame(frames, 0);
   std::vector<int> cameras_used;
   for (const GlintObservation& g : glints) {
@@ -178,7 +183,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
       throw std::invalid_argument("fit_cornea: a glint's " + what + " = " + std::to_string(value) +
                                   ": must be in [0, " + std::to_string(size) + ")");
     };
-    if (g.frame < 0 || g.frame >= frames) bad("frame", g.frame, starts.size());
+    if (g.frame < 0 || g.frame >= frames) bad("frame", g.frame, static_cast<std::size_t>(frames));
     if (g.camera < 0 || g.camera >= static_cast<int>(cameras.size())) bad("camera", g.camera, cameras.size());
     if (g.light < 0 || g.light >= static_cast<int>(lights.size())) bad("light", g.light, lights.size());
     for (const double sd : {g.sd_u_px, g.sd_v_px}) {
@@ -192,6 +197,75 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
       cameras_used.push_back(g.camera);
     }
   }
+  return {per_frame, cameras_used};
+}
+
+// Each frame starts where its first camera's glints put a sphere of the
+// start's radius (for a conicoid, its apex sphere: millimetres off in
+// depth), or at the caller's start where they do not.
+std::vector<double> start_point(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                                const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
+                                const CorneaFitSettings& s, int n) {
+  std::vector<double> x(n);
+  for (int f = 0; f < static_cast<int>(starts.size()); ++f) {
+    Point3 start = starts[f];
+    const auto first = std::find_if(glints.begin(), glints.end(), [&](const GlintObservation& g) { return g.frame == f; });
+    const std::optional<Point3> closed =
+        closed_form_center(cameras[first->camera], lights, glints, f, first->camera, s.cornea_radius_mm);
+    if (closed && closed->is_finite()) start = *closed;
+    x[3 * f] = start.x, x[3 * f + 1] = start.y, x[3 * f + 2] = start.z;
+  }
+  if (s.fit_radius) x[n - 1] = s.cornea_radius_mm;
+  return x;
+}
+
+// The covariance of the unknowns from the whitened Jacobian at the
+// estimate, and the warnings it gives: unknowns the glints do not
+// determine, or determine only weakly at the assumed noise. False when J^T
+// J is singular (no covariance).
+bool add_covariance(CorneaFit& out, const std::vector<double>& jacobian, int m, int n, int frames,
+                    const CorneaFitSettings& s, const std::function<std::string()>& noise) {
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jacobian.data(), m, n);
+  // Coefficient by coefficient: a few columns (3 per frame) need no blocked product.
+  const Eigen::MatrixXd normal = j.transpose().lazyProduct(j);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  const double lo = eigen.eigenvalues()(0), hi = eigen.eigenvalues()(n - 1);
+  out.condition = lo > 0 ? hi / lo : INFINITY;
+  if (!(out.condition <= kSingularCondition)) {
+    out.warnings.push_back("the glints do not determine the unknowns (condition of J^T J " +
+                           number(out.condition) + "), e.g. lights at one place or in line with the eye");
+    if (!std::isfinite(out.condition)) out.condition = 0;
+    return false;
+  }
+  const Eigen::VectorXd inverse_values = eigen.eigenvalues().cwiseInverse();
+  const Eigen::MatrixXd covariance =
+      eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  out.covariance_mm2.assign(covariance.data(), covariance.data() + n * n);  // symmetric: either order
+
+  for (int f = 0; f < frames; ++f) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> block(covariance.block<3, 3>(3 * f, 3 * f));
+    const double sd = std::sqrt(std::max(0.0, block.eigenvalues()(2)));
+    if (sd > s.max_sd_mm) {
+      out.warnings.push_back("frame " + std::to_string(f) + "'s cornea centre is weakly determined: " +
+                             number(sd) + " mm standard deviation along " +
+                             direction(block.eigenvectors().col(2)) + " at " + noise());
+    }
+  }
+  if (s.fit_radius && std::sqrt(covariance(n - 1, n - 1)) > s.max_sd_mm) {
+    out.warnings.push_back("the cornea's radius is weakly determined: " +
+                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " + noise());
+  }
+  return true;
+}
+
+CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illuminator>& lights,
+                   const std::vector<GlintObservation>& glints, const std::vector<Point3>& starts,
+                   const CorneaFitSettings& s, const std::vector<UnitVector3>& axes) {
+  const int frames = static_cast<int>(starts.size());
+  if (frames == 0) throw std::invalid_argument("fit_cornea: no frames (starts is empty)");
+  const GlintCounts counts = count_glints(cameras, lights, glints, frames);
+  const std::vector<int>& per_frame = counts.per_frame;
 
   CorneaFit out;
   out.centers = starts;
@@ -207,7 +281,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   }
   if (!out.warnings.empty()) return out;
   const bool prior = s.fit_radius && s.radius_prior_sd_mm > 0;
-  if (s.fit_radius && !prior && frames == 1 && cameras_used.size() == 1) {
+  if (s.fit_radius && !prior && frames == 1 && counts.cameras_used.size() == 1) {
     out.warnings.push_back(
         "the radius is fitted from one frame of one camera: radius and depth trade against each other "
         "there, so the radius is hardly determined; use several frames with the eye in different places, "
@@ -269,19 +343,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
     return true;
   };
 
-  // Each frame starts where its first camera's glints put a sphere of the
-  // start's radius (for a conicoid, its apex sphere: millimetres off in
-  // depth), or at the caller's start where they do not.
-  std::vector<double> x(n);
-  for (int f = 0; f < frames; ++f) {
-    Point3 start = starts[f];
-    const auto first = std::find_if(glints.begin(), glints.end(), [&](const GlintObservation& g) { return g.frame == f; });
-    const std::optional<Point3> closed =
-        closed_form_center(cameras[first->camera], lights, glints, f, first->camera, s.cornea_radius_mm);
-    if (closed && closed->is_finite()) start = *closed;
-    x[3 * f] = start.x, x[3 * f + 1] = start.y, x[3 * f + 2] = start.z;
-  }
-  if (s.fit_radius) x[n - 1] = s.cornea_radius_mm;
+  std::vector<double> x = start_point(cameras, lights, glints, starts, s, n);
   // Steps below 1e-10 of the centre's distance (4e-9 mm at 35 mm, 6e-8 mm
   // at 600 mm) are far below any glint's noise and the 1e-6 mm the fit
   // must reach from exact glints; with noisy glints Gauss-Newton
@@ -314,37 +376,7 @@ CorneaFit fit_once(const std::vector<Camera>& cameras, const std::vector<Illumin
   }
   out.rms_residual_px = std::sqrt(sum / (2.0 * glints.size()));
 
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
-      jacobian.data(), m, n);
-  // Coefficient by coefficient: a few columns (3 per frame) need no blocked product.
-  const Eigen::MatrixXd normal = j.transpose().lazyProduct(j);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
-  const double lo = eigen.eigenvalues()(0), hi = eigen.eigenvalues()(n - 1);
-  out.condition = lo > 0 ? hi / lo : INFINITY;
-  if (!(out.condition <= kSingularCondition)) {
-    out.warnings.push_back("the glints do not determine the unknowns (condition of J^T J " +
-                           number(out.condition) + "), e.g. lights at one place or in line with the eye");
-    if (!std::isfinite(out.condition)) out.condition = 0;
-    return out;
-  }
-  const Eigen::VectorXd inverse_values = eigen.eigenvalues().cwiseInverse();
-  const Eigen::MatrixXd covariance =
-      eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
-  out.covariance_mm2.assign(covariance.data(), covariance.data() + n * n);  // symmetric: either order
-
-  for (int f = 0; f < frames; ++f) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> block(covariance.block<3, 3>(3 * f, 3 * f));
-    const double sd = std::sqrt(std::max(0.0, block.eigenvalues()(2)));
-    if (sd > s.max_sd_mm) {
-      out.warnings.push_back("frame " + std::to_string(f) + "'s cornea centre is weakly determined: " +
-                             number(sd) + " mm standard deviation along " +
-                             direction(block.eigenvectors().col(2)) + " at " + noise());
-    }
-  }
-  if (s.fit_radius && std::sqrt(covariance(n - 1, n - 1)) > s.max_sd_mm) {
-    out.warnings.push_back("the cornea's radius is weakly determined: " +
-                           number(std::sqrt(covariance(n - 1, n - 1))) + " mm standard deviation at " + noise());
-  }
+  if (!add_covariance(out, jacobian, m, n, frames, s, noise)) return out;
   if (!out.converged) out.warnings.push_back("the fit stopped before converging: " + summary.message);
   return out;
 }

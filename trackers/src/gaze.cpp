@@ -452,6 +452,40 @@ ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminato
 
 namespace {
 
+// The centre of rotation, where the optical axes through the cornea's
+// centres meet in the least-squares sense, and its standard deviations;
+// left unset when an axis is missing or the axes do not determine it.
+void fit_rotation_center(ModelGazeCalibration& out, const Camera& camera, const std::vector<Point3>& centers,
+                         const std::vector<GazeFeatures>& frames) {
+  const int rows = 3 * static_cast<int>(frames.size());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, 4);
+  Eigen::VectorXd c(rows);
+  bool axes = true;
+  for (std::size_t f = 0; f < frames.size() && axes; ++f) {
+    const std::optional<OpticalAxis> axis = pupil_axis(camera, centers[f], frames[f], out.model);
+    axes = axis.has_value();
+    if (!axes) break;
+    for (int k = 0; k < 3; ++k) {
+      const int row = 3 * static_cast<int>(f) + k;
+      a(row, k) = 1;
+      a(row, 3) = axis->direction.vector()[k];
+      c[row] = centers[f][k];
+    }
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd singular = svd.singularValues();
+  if (axes && rows > 4 && singular[3] > 1e-6 * singular[0]) {
+    const Eigen::VectorXd x = svd.solve(c);
+    const double rss = (a * x - c).squaredNorm();
+    // (A^T A)^-1 = V S^-2 V^T: no diagonal can come out negative.
+    const Eigen::MatrixXd covariance = rss / (rows - 4) * svd.matrixV() *
+                                       singular.cwiseAbs2().cwiseInverse().asDiagonal() * svd.matrixV().transpose();
+    out.rotation_center = Point3{x[0], x[1], x[2]};
+    out.rotation_distance_mm = x[3];
+    for (int k = 0; k < 3; ++k) out.rotation_center_sd_mm[k] = std::sqrt(covariance(k, k));
+  }
+}
+
 // One calibration with the cornea's axes from `initial`'s pupil depth.
 ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illuminator>& lights,
                                     const std::vector<GazeFeatures>& frames, const std::vector<Point3>& targets,
@@ -579,34 +613,7 @@ ModelGazeCalibration calibrate_pass(const Camera& camera, const std::vector<Illu
   }
   if (!out.converged) out.warnings.push_back("the calibration stopped before converging: " + summary.message);
 
-  // The centre of rotation from the cornea's centres and the optical axes.
-  const int rows = 3 * static_cast<int>(frames.size());
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, 4);
-  Eigen::VectorXd c(rows);
-  bool axes = true;
-  for (std::size_t f = 0; f < frames.size() && axes; ++f) {
-    const std::optional<OpticalAxis> axis = pupil_axis(camera, cornea.centers[f], frames[f], out.model);
-    axes = axis.has_value();
-    if (!axes) break;
-    for (int k = 0; k < 3; ++k) {
-      const int row = 3 * static_cast<int>(f) + k;
-      a(row, k) = 1;
-      a(row, 3) = axis->direction.vector()[k];
-      c[row] = cornea.centers[f][k];
-    }
-  }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd singular = svd.singularValues();
-  if (axes && rows > 4 && singular[3] > 1e-6 * singular[0]) {
-    const Eigen::VectorXd x = svd.solve(c);
-    const double rss = (a * x - c).squaredNorm();
-    // (A^T A)^-1 = V S^-2 V^T: no diagonal can come out negative.
-    const Eigen::MatrixXd covariance = rss / (rows - 4) * svd.matrixV() *
-                                       singular.cwiseAbs2().cwiseInverse().asDiagonal() * svd.matrixV().transpose();
-    out.rotation_center = Point3{x[0], x[1], x[2]};
-    out.rotation_distance_mm = x[3];
-    for (int k = 0; k < 3; ++k) out.rotation_center_sd_mm[k] = std::sqrt(covariance(k, k));
-  }
+  fit_rotation_center(out, camera, cornea.centers, frames);
   return out;
 }
 

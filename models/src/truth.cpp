@@ -57,9 +57,14 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         g.illuminator = l;
         g.reflection = solve_reflection(eye, scene.illuminators[l].position, camera.center());
         g.status = image_of(g.reflection.status, g.reflection.point, camera, g.pixel);
+        if (g.status == PathStatus::ok && options.occluded &&
+            (options.occluded(scene.illuminators[l].position, g.reflection.point) ||
+             options.occluded(g.reflection.point, camera.center()))) {
+          g.status = PathStatus::occluded;
+        }
         view.glints.push_back(g);
       }
-      std::vector<Pixel> ok_pixels;
+      std::vector<Pixel> ok_pixels, visible_pixels;
       for (int k = 0; k < options.pupil_border_points; ++k) {
         PupilBorderPointTruth b;
         b.angle_rad = kTwoPi * k / options.pupil_border_points;
@@ -68,15 +73,30 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         b.status = img.status;
         b.pixel = img.pixel;
         b.refraction = img.path;
-        if (b.status == PathStatus::ok) ok_pixels.push_back(b.pixel);
+        if (b.status == PathStatus::ok) {
+          ok_pixels.push_back(b.pixel);
+          if (options.occluded && options.occluded(b.refraction.anterior_point, camera.center())) {
+            b.status = PathStatus::occluded;
+          } else {
+            visible_pixels.push_back(b.pixel);
+          }
+        }
         view.pupil.border.push_back(b);
       }
       if (auto ellipse = fit_ellipse(ok_pixels)) {
         view.pupil.ellipse_valid = true;
         view.pupil.ellipse = *ellipse;
       }
+      if (auto ellipse = fit_ellipse(visible_pixels)) {
+        view.pupil.visible_ellipse_valid = true;
+        view.pupil.visible_ellipse = *ellipse;
+      }
       const RefractedImage centre = image_through_cornea(eye, camera, eye.pupil_center());
       view.pupil.refracted_center_status = centre.status;
+      if (centre.status == PathStatus::ok && options.occluded &&
+          options.occluded(centre.path.anterior_point, camera.center())) {
+        view.pupil.refracted_center_status = PathStatus::occluded;
+      }
       view.pupil.refracted_center = centre.pixel;
       view.pupil.refracted_center_path = centre.path;
       view.pupil.unrefracted_center = camera.project(eye.pupil_center());

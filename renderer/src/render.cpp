@@ -706,33 +706,6 @@ std::vector<Refine> find_edges(const ImagePlane& radiance, const ImagePlane& id,
   return edges;
 }
 
-// Labels agree with what the camera can see: a glint or pupil point whose
-// light is blocked by the lids or the sclera is marked occluded.
-void apply_visibility(const Scene& scene, int camera, const RayTracer& tracer, SceneTruth& truth) {
-  const Point3 center = scene.cameras[camera].center();
-  for (EyeInCameraTruth& view : truth.views) {
-    if (view.camera != camera) continue;
-    for (GlintTruth& g : view.glints) {
-      if (g.status != PathStatus::ok) continue;
-      const Point3& p = g.reflection.point;
-      if (tracer.occluded_except_cornea(scene.illuminators[g.illuminator].position, p) ||
-          tracer.occluded_except_cornea(p, center)) {
-        g.status = PathStatus::occluded;
-      }
-    }
-    for (PupilBorderPointTruth& b : view.pupil.border) {
-      if (b.status == PathStatus::ok && tracer.occluded_except_cornea(b.refraction.anterior_point, center)) {
-        b.status = PathStatus::occluded;
-      }
-    }
-    PupilTruth& pupil = view.pupil;
-    if (pupil.refracted_center_status == PathStatus::ok &&
-        tracer.occluded_except_cornea(pupil.refracted_center_path.anterior_point, center)) {
-      pupil.refracted_center_status = PathStatus::occluded;
-    }
-  }
-}
-
 // Image memory to reuse: fresh memory costs a page fault per 4 KB when
 // first written, a tenth of a remote render. A render takes its planes
 // from the previous result's and from what this thread's earlier renders
@@ -805,9 +778,12 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   result.aovs.clear();
   result.glints.clear();
   result.camera = camera_index;
-  result.truth = compute_truth(scene);
   const RayTracer tracer(scene);
-  apply_visibility(scene, camera_index, tracer, result.truth);
+  // Labels agree with what the camera can see: a glint or pupil point whose
+  // light or view the lids, the sclera or a mesh blocks is occluded.
+  TruthOptions truth_options;
+  truth_options.occluded = [&](const Point3& from, const Point3& to) { return tracer.occluded_except_cornea(from, to); };
+  result.truth = compute_truth(scene, truth_options);
 
   const int spp = options.samples_per_pixel;
   const int edge_spp = edge_samples_per_pixel(options);
@@ -1022,20 +998,17 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   ImagePlane glint_total = pool.take();
   std::vector<ImagePlane> glint_planes;
   for (std::size_t l = 0; l < (options.per_light_glint_masks ? n_lights : 0); ++l) glint_planes.push_back(pool.take());
-  for (EyeInCameraTruth& view : result.truth.views) {
+  for (const EyeInCameraTruth& view : result.truth.views) {
     if (view.camera != camera_index) continue;
-    for (GlintTruth& g : view.glints) {
+    for (const GlintTruth& g : view.glints) {
       GlintImage image;
       image.eye = view.eye;
       image.illuminator = g.illuminator;
       image.status = g.status;
       const Illuminator& light = scene.illuminators[g.illuminator];
       if (g.status == PathStatus::ok) {
+        // An ok glint's reflection lies on the cap: its radiometry is ok too.
         image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection);
-        if (image.radiometry.status != PathStatus::ok) {
-          // The labels must not promise a glint the image lacks.
-          g.status = image.status = image.radiometry.status;
-        }
         image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm);
         if (image.electrons > 0 && std::isfinite(image.electrons)) {
           add_point_image(glint_total, g.pixel.u, g.pixel.v, image.electrons, psf,

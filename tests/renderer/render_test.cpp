@@ -225,7 +225,7 @@ TEST(RenderReflection, AMeshAppearsInTheCorneasReflection) {
   EXPECT_NEAR((with - without) / expected, 1.0, 0.005) << "with " << with << ", without " << without;
 }
 
-// apply_visibility asks the ray tracer whether anything lies between a
+// The truth's occlusion, the ray tracer, tells whether anything lies between a
 // light and its glint: a mesh there hides the glint, in the labels and
 // in the image.
 TEST(RenderLabels, AMeshBetweenALightAndItsGlintMarksTheGlintOccluded) {

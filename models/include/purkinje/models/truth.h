@@ -2,6 +2,7 @@
 // Ground truth for a scene, per camera and eye: glints, the refracted pupil
 // and the eye's axes, as the camera sees them.
 
+#include <functional>
 #include <vector>
 
 #include "purkinje/models/camera.h"
@@ -34,11 +35,16 @@ struct PupilBorderPointTruth {
 
 struct PupilTruth {
   std::vector<PupilBorderPointTruth> border;
-  bool ellipse_valid = false;  // needs at least 6 border points with status ok
-  // Fitted (Halir-Flusser) to the ok border pixels of compute_truth. The
-  // renderer's visibility check marks points a lid hides occluded after the
-  // fit and keeps this ellipse: it stays the whole pupil's.
+  bool ellipse_valid = false;  // needs at least 6 border points whose path exists
+  // Fitted (Halir-Flusser) to the border pixels whose refracted path exists
+  // and lies in the image, whether or not a lid hides them: the whole
+  // pupil's outline.
   Ellipse ellipse;
+  // Fitted to the border pixels the camera sees (status ok, after the
+  // scene's occlusion): what a detector can fit. Without an occlusion in
+  // TruthOptions it is the whole pupil's.
+  bool visible_ellipse_valid = false;
+  Ellipse visible_ellipse;
   // The pupil centre seen through the cornea (its own refracted path).
   PathStatus refracted_center_status = PathStatus::no_solution;
   Pixel refracted_center;
@@ -71,8 +77,16 @@ struct SceneTruth {
   std::vector<EyeInCameraTruth> views;  // camera-major: (camera 0, eye 0), (camera 0, eye 1), ...
 };
 
+// Whether anything of the scene as rendered (lids, skin, meshes; not the
+// cornea, whose paths the solver has already followed) blocks the straight
+// path between two points. The renderer's ray tracer supplies it.
+using Occlusion = std::function<bool(const Point3& from, const Point3& to)>;
+
 struct TruthOptions {
   int pupil_border_points = 36;
+  // When given, a glint whose light or view is blocked, and a pupil point
+  // or refracted centre the camera cannot see, has status occluded.
+  Occlusion occluded;
 };
 
 SceneTruth compute_truth(const Scene& scene, const TruthOptions& options = {});

@@ -96,7 +96,7 @@ struct RenderResult {
   ImagePlane electrons;
   SensorImage sensor;           // noise, saturation, quantization
   std::vector<NamedPlane> aovs; // depth, N.x/N.y/N.z, id, class coverages, glint masks
-  SceneTruth truth;             // compute_truth, with visibility applied for this camera
+  SceneTruth truth;             // compute_truth with the ray tracer's occlusion (every camera's views)
   std::vector<GlintImage> glints;
 };
 

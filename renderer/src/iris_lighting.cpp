@@ -43,6 +43,7 @@
 
 #include "purkinje/models/check.h"
 #include "purkinje/renderer/radiometry.h"
+#include "sampler.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -507,12 +508,6 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-std::uint64_t mix(std::uint64_t z) {  // splitmix64's finalizer
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 // Hashes of lattice points for one seed and one texture layer: the seed
 // mixed once per lookup, each layer offset by its own odd constant, and
 // one cheap mix per lattice point (enough for value noise).
@@ -668,7 +663,7 @@ double iris_albedo(const EyeModel& model, const EyeAppearance& appearance, doubl
   const double span = std::max(border - model.pupil_radius_mm, 1e-3);
   const double rho = std::clamp((from_centre - model.pupil_radius_mm) / span, 0.0, 1.0);
   double turn = turn_of(dx, dy);
-  const std::uint64_t seed = mix(appearance.iris_seed);
+  const std::uint64_t seed = mix64(appearance.iris_seed);
 
   // Radial fibres: noise of high angular and low radial frequency, with a
   // slow angular waviness so that the fibres are not straight spokes.

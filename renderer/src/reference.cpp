@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "integrator.h"
+#include "sampler.h"
 #include "purkinje/renderer/radiometry.h"
 #include "purkinje/renderer/sensor_model.h"
 
@@ -44,12 +45,6 @@ constexpr double kInvPi = 1.0 / std::numbers::pi;
 constexpr int kMaxSpecularDepth = 8;     // interface crossings per straight segment chain
 constexpr int kMaxDiffuseBounces = 4;    // albedos <= 0.55: the 5th bounce carries < 2%
 constexpr double kMinBranchWeight = 1e-6;
-// Random numbers per camera path (its index is shifted by this many bits).
-constexpr int kDimensionBits = 10;
-constexpr std::uint64_t kDimensions = std::uint64_t{1} << kDimensionBits;
-// Random streams; the fast mode and the sensor use 1 and 2.
-constexpr std::uint64_t kPathStream = 3;
-constexpr std::uint64_t kPhotonStream = 4;
 // Photon flux is summed in units of 2^-32 of a photon's flux, so that sums
 // are exact integers whatever the order of the threads (at most 2^30
 // photons of weight about 1 keep a bin below 2^63).
@@ -261,21 +256,6 @@ class IrisPhotonMap {
   int side_ = 0;
   std::vector<double> irradiance_;
   std::vector<bool> inside_;  // the bin reaches inside the shell
-};
-
-// The random numbers of one camera path.
-class PathSampler {
- public:
-  PathSampler(std::uint64_t seed, std::uint64_t path) : seed_(seed), base_(path << kDimensionBits) {}
-  double next() {
-    // Past the last dimension the path reuses numbers; kMaxDiffuseBounces
-    // keeps paths far below that.
-    const std::uint64_t d = dimension_++ & (kDimensions - 1);
-    return uniform01(seed_, kPathStream, base_ + d);
-  }
-
- private:
-  std::uint64_t seed_, base_, dimension_ = 0;
 };
 
 class ReferenceIntegrator final : public PathIntegrator {

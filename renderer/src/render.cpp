@@ -20,6 +20,7 @@
 #include <string>
 
 #include "integrator.h"
+#include "sampler.h"
 #include "screen_cache.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/sensor_model.h"
@@ -47,14 +48,6 @@ constexpr double kMinBranchWeight = 1e-4;
 // Angular half-width (1/e) of the fundus's retro-reflection lobe: bright
 // pupil needs a light within a few degrees of the camera as seen from the eye.
 constexpr double kFundusLobeRad = 1.5 * std::numbers::pi / 180;
-
-// Random-number streams (see uniform01): one per purpose.
-enum Stream : std::uint64_t {
-  kJitterStream = 1,
-  kSensorStream = 2,
-  kCacheNodeStream = 3,
-  kCacheMissStream = 4,
-};
 
 // The diffuse cache (screen_cache.h): node spacings, gather rays per node,
 // and the fewer rays gathered where no node serves a point. Coarse cells
@@ -194,14 +187,6 @@ int edge_samples_per_pixel(const RenderOptions& options) {
 }
 
 namespace {
-
-// Additive recurrence (the R2 sequence): well-spread points of the unit
-// square for any count, shifted by (shift_u, shift_v).
-std::array<double, 2> subpixel_offset_r2(int sample, double shift_u, double shift_v) {
-  constexpr double a1 = 0.7548776662466927, a2 = 0.5698402909980532;
-  const double u = shift_u + a1 * sample, v = shift_v + a2 * sample;
-  return {u - std::floor(u), v - std::floor(v)};
-}
 
 // Nodes per side of an eye's iris grids: the lights' caches (the option,
 // or from the iris's size in the image: a node every 2 px, odd, 9 to
@@ -412,7 +397,7 @@ class FastIntegrator final : public PathIntegrator {
       count = 0;
     };
     for (int i = 0; i < rays; ++i) {
-      const auto [u, v] = subpixel_offset_r2(i, shift_u, shift_v);
+      const auto [u, v] = r2_point(i, shift_u, shift_v);
       const double s = std::sqrt(u), phi = 2 * std::numbers::pi * v;
       const auto dir = UnitVector3::try_normalize(normal * std::sqrt(std::max(0.0, 1 - u)) +
                                                   a * (s * std::cos(phi)) + b * (s * std::sin(phi)));
@@ -900,7 +885,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     for (int first = centre ? 1 : 0; first < samples; first += kPacket) {
       const int count = std::min(kPacket, samples - first);
       for (int i = 0; i < count; ++i) {
-        const auto [ou, ov] = subpixel_offset_r2(first + i, shift_u, shift_v);
+        const auto [ou, ov] = r2_point(first + i, shift_u, shift_v);
         positions[i] = {x - 0.5 + ou, y - 0.5 + ov};
         rays[i] = camera_ray(positions[i]);
       }

@@ -1,6 +1,7 @@
 #include "purkinje/renderer/sensor_model.h"
 
 #include "purkinje/models/check.h"
+#include "sampler.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -27,9 +28,6 @@ using check::require_positive;
 constexpr double kPlanck = 6.62607015e-34;    // J s (exact, SI 2019)
 constexpr double kLightSpeed = 299792458.0;   // m / s (exact)
 
-// Random streams used inside this file; callers of uniform01 keep below 2^63.
-constexpr std::uint64_t kNoiseStream = 0x8000000000000001ull;
-
 void require_plane(const char* what, const ImagePlane& plane) {
   if (plane.width < 0 || plane.height < 0 ||
       plane.values.size() != static_cast<std::size_t>(plane.width) * plane.height) {
@@ -45,110 +43,6 @@ double photons_per_joule(double wavelength_nm) {
   require_positive("wavelength_nm", wavelength_nm);
   return wavelength_nm * 1e-9 / (kPlanck * kLightSpeed);
 }
-
-// ---------------------------------------------------------------------------
-// Counter-based random numbers.
-
-// splitmix64's finalizer: a bijection of 64-bit words with full avalanche.
-std::uint64_t mix64(std::uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-// The key of (seed, stream, index) in two steps, so that loops over pixels
-// hash the invariant part once. Each step is a bijection, so distinct
-// indices of one (seed, stream) never share a key.
-std::uint64_t stream_key(std::uint64_t seed, std::uint64_t stream) {
-  return mix64(mix64(seed + 0x9E3779B97F4A7C15ull) ^ (stream + 0x632BE59BD9B4E019ull));
-}
-std::uint64_t counter_key(std::uint64_t stream_key, std::uint64_t index) {
-  return mix64(stream_key ^ (index + 0xD1B54A32D192ED03ull));
-}
-
-double to_unit(std::uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }
-
-// Tables of Marsaglia and Tsang's ziggurat for the standard normal (2000,
-// "The ziggurat method for generating random variables"): 128 layers of
-// equal area v under exp(-x^2 / 2), the base one with the tail beyond r.
-struct Ziggurat {
-  static constexpr double r = 3.442619855899;        // right edge of the base layer
-  static constexpr double v = 9.91256303526217e-3;   // area of each layer
-  static constexpr double scale = 2147483648.0;      // 2^31: draws are signed 32-bit
-  std::array<double, 128> k{};  // accept |draw| < k[i] at once (layer i's rectangle core)
-  std::array<double, 128> w{};  // x = draw * w[i]
-  std::array<double, 128> f{};  // exp(-x_i^2 / 2)
-  Ziggurat() {
-    double x = r, outer = r;
-    const double q = v / std::exp(-0.5 * r * r);
-    k[0] = (r / q) * scale;
-    k[1] = 0;
-    w[0] = q / scale;
-    w[127] = r / scale;
-    f[0] = 1;
-    f[127] = std::exp(-0.5 * r * r);
-    for (int i = 126; i >= 1; --i) {
-      x = std::sqrt(-2 * std::log(v / x + std::exp(-0.5 * x * x)));
-      k[i + 1] = (x / outer) * scale;
-      outer = x;
-      f[i] = std::exp(-0.5 * x * x);
-      w[i] = x / scale;
-    }
-  }
-};
-
-// Built at load time: no guard on the hot path.
-const Ziggurat kZiggurat;
-
-// A pixel's private sequence: splitmix64 started from the pixel's key.
-class PixelRandom {
- public:
-  explicit PixelRandom(std::uint64_t key) : state_(key) {}
-  std::uint64_t bits() {
-    state_ += 0x9E3779B97F4A7C15ull;
-    return mix64(state_);
-  }
-  double uniform() { return to_unit(bits()); }
-  // Ziggurat: ~99% of draws cost one table look-up and a multiply. The
-  // layer comes from the low bits and the signed position from the high
-  // ones, so the two are independent (Doornik, 2005).
-  double normal() {
-    const Ziggurat& z = kZiggurat;
-    const std::uint64_t b = bits();
-    const int layer = static_cast<int>(b & 127);
-    const double draw = static_cast<double>(static_cast<std::int32_t>(static_cast<std::uint32_t>(b >> 32)));
-    if (std::abs(draw) < z.k[layer]) [[likely]] {
-      return draw * z.w[layer];
-    }
-    return normal_outside_core(layer, draw);
-  }
-
- private:
-  // The rare rest of the ziggurat, kept out of line so the common path
-  // inlines.
-  [[gnu::noinline]] double normal_outside_core(int layer, double draw) {
-    const Ziggurat& z = kZiggurat;
-    for (;;) {
-      const double x = draw * z.w[layer];
-      if (layer == 0) {  // the tail beyond r, by Marsaglia's exponential method
-        double tail = 0, y = 0;
-        do {
-          tail = -std::log(1 - uniform()) / Ziggurat::r;
-          y = -std::log(1 - uniform());
-        } while (y + y < tail * tail);
-        return draw > 0 ? Ziggurat::r + tail : -Ziggurat::r - tail;
-      }
-      // The wedge between the layer's core and the curve.
-      if (z.f[layer] + uniform() * (z.f[layer - 1] - z.f[layer]) < std::exp(-0.5 * x * x)) return x;
-      const std::uint64_t b = bits();
-      layer = static_cast<int>(b & 127);
-      draw = static_cast<double>(static_cast<std::int32_t>(static_cast<std::uint32_t>(b >> 32)));
-      if (std::abs(draw) < z.k[layer]) return draw * z.w[layer];
-    }
-  }
-
-  std::uint64_t state_;
-};
 
 // 1 / k, so that the Poisson inversion multiplies instead of divides.
 constexpr std::array<double, 64> kInverse = [] {
@@ -708,7 +602,7 @@ SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint6
   const double full_well = sensor.full_well_e, read_noise = sensor.read_noise_e;
 
   const bool noise = sensor.noise;
-  const std::uint64_t noise_key = stream_key(seed, kNoiseStream);
+  const std::uint64_t noise_key = stream_key(seed, kSensorNoiseStream);
   for_rows(electrons.height, [&](int y) {
     const std::size_t row = static_cast<std::size_t>(y) * electrons.width;
     const float* in = electrons.values.data() + row;
@@ -737,8 +631,5 @@ SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint6
   return image;
 }
 
-double uniform01(std::uint64_t seed, std::uint64_t stream, std::uint64_t index) {
-  return to_unit(counter_key(stream_key(seed, stream), index));
-}
 
 }  // namespace purkinje::renderer

@@ -66,8 +66,8 @@ void add_point_image(ImagePlane& electrons, double u, double v, double total_ele
 SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint64_t seed);
 
 // A counter-based random number in [0, 1) from (seed, stream, index): the
-// same inputs always give the same number. Streams >= 2^63 are reserved
-// for this file (expose's noise).
+// same inputs always give the same number. The renderer's own streams
+// (src/sampler.h) are 1 to 4 and, for expose's noise, one above 2^63.
 double uniform01(std::uint64_t seed, std::uint64_t stream, std::uint64_t index);
 
 }  // namespace purkinje::renderer

@@ -41,7 +41,6 @@
 namespace purkinje::renderer {
 namespace {
 
-constexpr double kInvPi = 1.0 / std::numbers::pi;
 constexpr int kMaxSpecularDepth = 8;     // interface crossings per straight segment chain
 constexpr int kMaxDiffuseBounces = 4;    // albedos <= 0.55: the 5th bounce carries < 2%
 constexpr double kMinBranchWeight = 1e-6;
@@ -217,9 +216,9 @@ class IrisPhotonMap {
   // splitting at every interface; deposits where it meets the iris plane.
   void trace_photon(const Ray& ray, double weight, int depth, std::vector<std::uint64_t>& bins) const {
     const Hit hit = tracer_.intersect(ray);
-    switch (hit.surface) {
-      case Surface::iris:
-      case Surface::pupil: {
+    switch (scattering_of(hit.surface)) {
+      case Scattering::iris:
+      case Scattering::pupil: {
         const Point3 p = eye_from_world_ * hit.point;
         const int x = static_cast<int>(std::floor((p.x + half_) / bin_));
         const int y = static_cast<int>(std::floor((p.y + half_) / bin_));
@@ -228,8 +227,7 @@ class IrisPhotonMap {
         }
         return;
       }
-      case Surface::cornea_anterior:
-      case Surface::cornea_posterior: {
+      case Scattering::interface: {
         if (depth >= kMaxSpecularDepth) return;
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const double w_t = weight * (1 - c.reflectance), w_r = weight * c.reflectance;
@@ -288,19 +286,17 @@ class ReferenceIntegrator final : public PathIntegrator {
   void trace(const Ray& ray, const Hit& hit, int depth, int bounces, double weight, PathSampler& rng,
              Contribution& out, PrimaryRecord* record) const {
     record_hit(hit, camera_, depth, record);
-    switch (hit.surface) {
-      case Surface::none:
+    switch (scattering_of(hit.surface)) {
+      case Scattering::none:
         return;
-      case Surface::skin:
-      case Surface::sclera:
-      case Surface::mesh: {
+      case Scattering::diffuse: {
         const double albedo = diffuse_albedo(scene_, hit);
         if (albedo == 0) return;  // the eye's dark inside
         direct_light(hit, weight * albedo, rng, out);
         indirect_light(hit, bounces, weight, albedo, rng, out);
         return;
       }
-      case Surface::iris: {
+      case Scattering::iris: {
         const double albedo = diffuse_albedo(scene_, hit);
         for (std::size_t k = 0; k < lights_.size(); ++k) {
           out.add(weight * albedo * kInvPi * iris_[hit.eye][k].irradiance_w_m2(hit.point), lights_[k]);
@@ -308,13 +304,12 @@ class ReferenceIntegrator final : public PathIntegrator {
         indirect_light(hit, bounces, weight, albedo, rng, out);
         return;
       }
-      case Surface::pupil:
+      case Scattering::pupil:
         // Only the fundus's retro-reflection comes back out of the pupil.
         add_bright_pupil(scene_.eyes[hit.eye], lights_, camera_.center(), weight,
                          [&](std::size_t k) { return iris_[hit.eye][k].irradiance_w_m2(hit.point); }, out);
         return;
-      case Surface::cornea_anterior:
-      case Surface::cornea_posterior: {
+      case Scattering::interface: {
         if (depth >= kMaxSpecularDepth) return;
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const Ray reflected{hit.point + c.facing * kRayOffsetMm, c.reflected.value_or(ray.direction)};
@@ -342,7 +337,7 @@ class ReferenceIntegrator final : public PathIntegrator {
   // Next-event estimation: one point of each LED's disc (facing the lit
   // point), visible or not.
   void direct_light(const Hit& hit, double scaled_albedo, PathSampler& rng, Contribution& out) const {
-    const Vector3 n = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
+    const Vector3 n = facing_normal(hit);
     const Point3 origin = hit.point + n * kRayOffsetMm;
     for (const Light& l : lights_) {
       const double u = rng.next(), v = rng.next();
@@ -352,7 +347,7 @@ class ReferenceIntegrator final : public PathIntegrator {
       const double cos_theta = dot(n, to_light) / std::sqrt(d2);
       if (!(cos_theta > 0)) continue;
       if (tracer_.occluded(origin, q)) continue;
-      out.add(scaled_albedo * kInvPi * l.intensity_w_sr * cos_theta / d2 * kPerSquareMm, l);
+      out.add(lambert_radiance(scaled_albedo, l, cos_theta, d2), l);
     }
   }
 
@@ -366,7 +361,7 @@ class ReferenceIntegrator final : public PathIntegrator {
       if (rng.next() >= survive) return;
       w /= survive;
     }
-    const Vector3 n = hit.front_face ? hit.normal.vector() : -hit.normal.vector();
+    const Vector3 n = facing_normal(hit);
     Vector3 a, b;
     basis(n, a, b);
     const double u = rng.next(), v = rng.next();

@@ -1,0 +1,476 @@
+// The fast integrator: Fresnel-weighted splitting at the cornea, direct
+// light from point lights with shadow rays (a screen-space visibility
+// cache where the camera sees the surface), the iris's light from exact
+// caches through the cornea, interreflection from a screen-space diffuse
+// cache. Physics and approximations: docs/rendering.md.
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <span>
+#include <vector>
+
+#include "integrator.h"
+#include "sampler.h"
+#include "screen_cache.h"
+#include "purkinje/renderer/radiometry.h"
+
+namespace purkinje::renderer {
+namespace {
+
+// Interfaces crossed or reflected at before a path is dropped: enough for
+// both corneal surfaces in and out plus a reflection.
+constexpr int kMaxSpecularDepth = 6;
+// A branch whose weight falls below this cannot change an 8- to 16-bit
+// pixel noticeably.
+constexpr double kMinBranchWeight = 1e-4;
+
+// The diffuse cache (screen_cache.h): node spacings, gather rays per node,
+// and the fewer rays gathered where no node serves a point. Coarse cells
+// whose corners differ by at most kDiffuseTolerance of the direct light
+// need no fine nodes: far from the eye, where interreflection is smooth
+// and small, that is most of a remote camera's image.
+constexpr GridSpacing kDiffuseCacheSpacing{32, 8};
+constexpr double kDiffuseTolerance = 0.005;
+constexpr int kDiffuseCacheRays = 64;
+constexpr int kDiffuseMissRays = 16;
+// The visibility cache (screen_cache.h): its nodes trace every light's
+// shadow ray; a point between four that agree traces none. Coarse nodes
+// every 8 px, and every 2 px in the coarse cells whose corners disagree or
+// see different surfaces: no shadow in the bundled scenes is missed (the
+// images are those of tracing every shadow ray), but a shadow narrower
+// than 8 px inside a cell whose four corners are lit would be.
+constexpr GridSpacing kVisibilitySpacing{8, 2};
+// Iris grids (iris_grid_sizes): node spacings in the image.
+constexpr double kIrisNodeSpacingPx = 2.0;
+constexpr double kIrisIndirectSpacingPx = 6.0;
+// A gathered ray's branches at the cornea are followed while they carry
+// this much of the ray's weight: what they gather is itself a few percent
+// of the image.
+constexpr double kGatherMinBranch = 1e-2;
+
+// Nodes per side of an eye's iris grids: the lights' caches (the option,
+// or from the iris's size in the image: a node every 2 px, odd, 9 to
+// 33) and the indirect light's (a node every 6 px, 7 to 13). Finer than
+// the pixels resolve gains nothing; a remote camera's iris is 49 px wide.
+struct IrisGridSizes {
+  int direct = 33, indirect = 13;
+};
+IrisGridSizes iris_grid_sizes(const Camera& camera, const Eye& eye, const RenderOptions& options) {
+  IrisGridSizes sizes;
+  const double z = (camera.camera_from_world() * eye.cornea_center()).z;
+  if (z > 0) {
+    const double diameter_px = 2 * eye.model().iris_radius_mm * camera.intrinsics().fx / z;
+    const auto odd = [&](double spacing_px, int lo, int hi) {
+      return std::clamp(2 * static_cast<int>(std::lround(diameter_px / (2 * spacing_px))) + 1, lo, hi);
+    };
+    sizes.direct = odd(kIrisNodeSpacingPx, 9, 33);
+    sizes.indirect = odd(kIrisIndirectSpacingPx, 7, 13);
+  }
+  if (options.iris_cache_resolution > 0) sizes.direct = options.iris_cache_resolution;
+  return sizes;
+}
+
+// Fast mode: Fresnel-weighted splitting at the cornea, direct light from
+// point lights with shadow rays, iris light from the exact caches.
+class FastIntegrator final : public PathIntegrator {
+ public:
+  // `traced`: the pixels that will be sampled (the caches cover them).
+  FastIntegrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
+                 const RenderOptions& options, const PixelRegion& traced)
+      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)), seed_(options.seed) {
+    const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
+      return !tracer_.occluded_except_cornea(light, cornea);
+    };
+    for (const Light& l : lights_) {
+      const auto same = std::find(group_electrons_.begin(), group_electrons_.end(), l.electrons_per_radiance);
+      group_of_light_.push_back(static_cast<std::size_t>(same - group_electrons_.begin()));
+      if (same == group_electrons_.end()) group_electrons_.push_back(l.electrons_per_radiance);
+    }
+    iris_.resize(scene.eyes.size());
+    for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+      const IrisGridSizes sizes = iris_grid_sizes(camera, scene.eyes[e], options);
+      for (const Light& l : lights_) {
+        iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr, sizes.direct, visible);
+      }
+      build_iris_indirect(static_cast<int>(e), sizes.indirect);
+      build_iris_light(static_cast<int>(e), sizes.direct);
+    }
+    diffuse_ = std::make_unique<DiffuseCache>(
+        camera, traced, kDiffuseCacheSpacing,
+        lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
+        [this](const DiffusePoint& p, std::uint64_t key, double* e) {
+          gather_hemisphere(p.point, p.normal, kDiffuseCacheRays, kCacheNodeStream, key, e);
+        },
+        [this](const DiffusePoint& p) { return unshadowed_irradiance(p.point, p.normal); }, kDiffuseTolerance);
+    visibility_ = std::make_unique<VisibilityCache>(
+        camera, traced, kVisibilitySpacing,
+        lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
+        [this](const DiffusePoint& p, std::size_t light) { return lit(p.point, p.normal, lights_[light]); });
+  }
+
+  void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
+              Contribution& out, PrimaryRecord& record, double reflection_weight) const override {
+    const Primary primary{&record, image_position, path, reflection_weight};
+    trace(ray, first_hit, 0, 1.0, out, &primary);
+  }
+
+ private:
+  // What the transmitted chain of a camera ray carries.
+  struct Primary {
+    PrimaryRecord* record;
+    Pixel image_position;
+    std::uint64_t path;
+    double reflection_weight = 1;  // of the branches the cornea reflects off this chain
+  };
+
+  // Radiance arriving along `ray`, times `weight`, added to `out`.
+  // `primary` is given along the transmitted chain of a camera ray.
+  void trace(const Ray& ray, int depth, double weight, Contribution& out, const Primary* primary) const {
+    trace(ray, tracer_.intersect(ray), depth, weight, out, primary);
+  }
+  // The same, where the ray's first hit is known.
+  void trace(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
+             const Primary* primary) const {
+    record_hit(hit, camera_, depth, primary ? primary->record : nullptr);
+    switch (scattering_of(hit.surface)) {
+      case Scattering::none:
+        return;
+      case Scattering::diffuse:
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
+          if (!primary) {
+            direct_light(hit, albedo * weight, out);
+            return;
+          }
+          // Where the camera sees the surface directly, shadows come from
+          // the visibility cache where it knows them, and interreflection
+          // is added: seen in the cornea's mirror it is a few percent of a
+          // few percent.
+          const DiffusePoint p = diffuse_point(ray, hit);
+          const VisibilityCache::Agreement agreed = visibility_->at(primary->image_position, p);
+          direct_light(hit, albedo * weight, out, &agreed);
+          interreflection(p, albedo * weight, *primary, out);
+        }
+        return;
+      case Scattering::iris: {
+        const Point3 local = scene_.eyes[hit.eye].eye_from_world() * hit.point;
+        const double scaled_albedo = weight * diffuse_albedo(scene_, hit) * kInvPi;
+        for (std::size_t g = 0; g < group_electrons_.size(); ++g) {
+          out.add(scaled_albedo * iris_light_[hit.eye].at(local, g), group_electrons_[g]);
+        }
+        return;
+      }
+      case Scattering::pupil:
+        add_bright_pupil(scene_.eyes[hit.eye], lights_, camera_.center(), weight,
+                         [&](std::size_t k) { return iris_[hit.eye][k].irradiance_w_m2(hit.point); }, out);
+        return;
+      case Scattering::interface:
+        interface(ray, hit, depth, weight, out, primary);
+        return;
+    }
+  }
+
+  static DiffusePoint diffuse_point(const Ray& ray, const Hit& hit) {
+    DiffusePoint p;
+    p.surface = hit.surface;
+    p.owner = hit.surface == Surface::mesh ? hit.mesh : hit.eye;
+    p.point = hit.point;
+    p.normal = facing_normal(hit);
+    p.cos_view = std::abs(dot(p.normal, ray.direction.vector()));
+    return p;
+  }
+
+  // The first diffuse point along the transmitted chain of the camera ray
+  // through `image_position` (for the diffuse cache's nodes).
+  DiffusePoint diffuse_point_at(const Pixel& image_position) const {
+    Ray ray{camera_.center(), camera_.back_project(image_position)};
+    double path_mm = 0;
+    for (int depth = 0; depth <= kMaxSpecularDepth; ++depth) {
+      const Hit hit = tracer_.intersect(ray);
+      path_mm += hit.t;
+      switch (scattering_of(hit.surface)) {
+        case Scattering::diffuse: {
+          if (!(diffuse_albedo(scene_, hit) > 0)) return {};
+          DiffusePoint p = diffuse_point(ray, hit);
+          p.path_mm = path_mm;
+          return p;
+        }
+        case Scattering::interface: {
+          const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+          if (!c.transmitted) return {};
+          ray = {hit.point - c.facing * kRayOffsetMm, *c.transmitted};
+          break;
+        }
+        default:
+          return {};  // the iris has its own cache; the pupil, nothing
+      }
+    }
+    return {};
+  }
+
+  // Irradiance from light that bounced off other diffuse surfaces, at a
+  // diffuse hit the camera sees: from the cache, or gathered here where no
+  // cache node serves the point.
+  void interreflection(const DiffusePoint& p, double scaled_albedo, const Primary& primary,
+                       Contribution& out) const {
+    constexpr std::size_t kStackLights = 16;
+    std::array<double, kStackLights> stack;  // written by the cache or the gather
+    std::vector<double> heap(lights_.size() > kStackLights ? lights_.size() : 0);
+    double* e = heap.empty() ? stack.data() : heap.data();
+    if (!diffuse_->irradiance(primary.image_position, p, e)) {
+      std::fill(e, e + lights_.size(), 0.0);
+      gather_hemisphere(p.point, p.normal, kDiffuseMissRays, kCacheMissStream, primary.path, e);
+    }
+    for (std::size_t k = 0; k < lights_.size(); ++k) out.add(scaled_albedo * kInvPi * e[k], lights_[k]);
+  }
+
+  // Irradiance at `point` (facing `normal`) from diffuse surfaces one
+  // bounce away, per light into `e`: `rays` cosine-distributed
+  // low-discrepancy directions, shifted by random numbers keyed by
+  // (stream, key).
+  void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, std::uint64_t stream,
+                         std::uint64_t key, double* e) const {
+    const double shift_u = uniform01(seed_, stream, 2 * key), shift_v = uniform01(seed_, stream, 2 * key + 1);
+    gather_hemisphere(point, normal, rays, shift_u, shift_v, e);
+  }
+  void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, double shift_u, double shift_v,
+                         double* e) const {
+    Vector3 a = std::abs(normal.x) < 0.9 ? cross(normal, Vector3{1, 0, 0}) : cross(normal, Vector3{0, 1, 0});
+    a = a * (1.0 / a.norm());
+    const Vector3 b = cross(normal, a);
+    const Point3 origin = point + normal * kRayOffsetMm;
+    // Cosine-distributed directions: E = pi * mean radiance.
+    const double weight = std::numbers::pi / rays;
+    // From one point: first hits in packets of 16.
+    constexpr int kPacket = 16;
+    std::array<Ray, kPacket> packet;
+    std::array<Hit, kPacket> hits;
+    int count = 0;
+    const auto flush = [&] {
+      tracer_.intersect(std::span<const Ray>(packet.data(), count), std::span<Hit>(hits.data(), count));
+      for (int j = 0; j < count; ++j) gather(packet[j], hits[j], 0, weight, kGatherMinBranch * weight, e);
+      count = 0;
+    };
+    for (int i = 0; i < rays; ++i) {
+      const auto [u, v] = r2_point(i, shift_u, shift_v);
+      const double s = std::sqrt(u), phi = 2 * std::numbers::pi * v;
+      const auto dir = UnitVector3::try_normalize(normal * std::sqrt(std::max(0.0, 1 - u)) +
+                                                  a * (s * std::cos(phi)) + b * (s * std::sin(phi)));
+      if (!dir) continue;
+      packet[count++] = {origin, *dir};
+      if (count == kPacket) flush();
+    }
+    if (count > 0) flush();
+  }
+
+  // Lambertian surface lit directly by the point lights; `scaled_albedo`
+  // carries the path weight.
+  void direct_light(const Hit& hit, double scaled_albedo, Contribution& out,
+                    const VisibilityCache::Agreement* agreed = nullptr) const {
+    direct_light(hit, scaled_albedo, [&](std::size_t k, double radiance) { out.add(radiance, lights_[k]); }, agreed);
+  }
+  // `agreed`: what the visibility cache knows of the lights here.
+  template <typename AddPerLight>
+  void direct_light(const Hit& hit, double scaled_albedo, const AddPerLight& add,
+                    const VisibilityCache::Agreement* agreed = nullptr) const {
+    const Vector3 n = facing_normal(hit);
+    const Point3 origin = hit.point + n * kRayOffsetMm;
+    for (std::size_t k = 0; k < lights_.size(); ++k) {
+      const Light& l = lights_[k];
+      const Vector3 to_light = l.position - hit.point;
+      const double d2 = to_light.squared_norm();
+      const double cos_theta = dot(n, to_light) / std::sqrt(d2);
+      if (!(cos_theta > 0)) continue;
+      if (agreed && k < VisibilityCache::kMaxLights && (agreed->known >> k & 1)) {
+        if (!(agreed->lit >> k & 1)) continue;
+      } else if (tracer_.occluded(origin, l.position)) {
+        continue;
+      }
+      add(k, lambert_radiance(scaled_albedo, l, cos_theta, d2));
+    }
+  }
+
+  // Irradiance (W/m^2) at a point facing `normal` from every light it
+  // faces, shadows ignored.
+  double unshadowed_irradiance(const Point3& point, const Vector3& normal) const {
+    double e = 0;
+    for (const Light& l : lights_) {
+      const Vector3 to_light = l.position - point;
+      const double d2 = to_light.squared_norm();
+      e += std::max(0.0, dot(normal, to_light)) / (d2 * std::sqrt(d2)) * l.intensity_w_sr * kPerSquareMm;
+    }
+    return e;
+  }
+
+  // Whether `light` lights a point facing `normal`.
+  bool lit(const Point3& point, const Vector3& normal, const Light& light) const {
+    return dot(normal, light.position - point) > 0 && !tracer_.occluded(point + normal * kRayOffsetMm, light.position);
+  }
+
+  // A square grid of nodes on an eye's iris plane (eye frame, centred on
+  // the optical axis), `channels` values per node, interpolated bilinearly
+  // and clamped at the edges.
+  struct IrisGrid {
+    double half_mm = 0, step_mm = 1;
+    int side = 0;
+    std::size_t channels = 0;
+    std::vector<double> values;  // [node][channel]
+    void resize(double half_size_mm, int nodes_per_side, std::size_t channel_count) {
+      half_mm = half_size_mm;
+      side = nodes_per_side;
+      step_mm = 2 * half_mm / (side - 1);
+      channels = channel_count;
+      values.assign(static_cast<std::size_t>(side) * side * channels, 0.0);
+    }
+    Point3 node_point(int node, double z_mm) const {
+      return {-half_mm + step_mm * (node % side), -half_mm + step_mm * (node / side), z_mm};
+    }
+    double* node_values(int node) { return values.data() + static_cast<std::size_t>(node) * channels; }
+    double at(const Point3& eye_frame_point, std::size_t channel) const {
+      if (side == 0) return 0;
+      const double fx = std::clamp((eye_frame_point.x + half_mm) / step_mm, 0.0, side - 1.0);
+      const double fy = std::clamp((eye_frame_point.y + half_mm) / step_mm, 0.0, side - 1.0);
+      const int x0 = std::min(static_cast<int>(fx), side - 2), y0 = std::min(static_cast<int>(fy), side - 2);
+      const double tx = fx - x0, ty = fy - y0;
+      const auto v = [&](int x, int y) { return values[(static_cast<std::size_t>(y) * side + x) * channels + channel]; };
+      return (1 - ty) * ((1 - tx) * v(x0, y0) + tx * v(x0 + 1, y0)) + ty * ((1 - tx) * v(x0, y0 + 1) + tx * v(x0 + 1, y0 + 1));
+    }
+  };
+
+  // Light that reaches the iris after one diffuse bounce elsewhere: iris
+  // light that the cornea's inner side reflects back (totally, beyond the
+  // critical angle) and lids and skin seen through the cornea. A few
+  // percent of the iris's light, more near the limbus, and smooth over the
+  // iris: so computed at the nodes of a coarse grid (channels: lights) by
+  // gathering over the hemisphere (kIndirectRays low-discrepancy
+  // directions, cosine-distributed).
+  static constexpr int kIndirectRays = 32;
+
+  void build_iris_indirect(int eye_index, int side) {
+    const Eye& eye = scene_.eyes[eye_index];
+    const EyeModel& m = eye.model();
+    IrisGrid& cache = iris_indirect_[eye_index];
+    cache.resize(m.iris_radius_mm, side, lights_.size());
+    const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
+    // Nodes outside the iris gather as if at its rim, so that lookups near
+    // the rim interpolate between iris values.
+    const double r_max = 0.98 * m.iris_radius_mm;
+    const UnitVector3 n = eye.world_from_eye().rotation() * UnitVector3::unit_z();
+    tbb::parallel_for(0, cache.side * cache.side, [&](int node) {
+      Point3 p = cache.node_point(node, z);
+      const double r = std::hypot(p.x, p.y);
+      if (r > r_max) p.x *= r_max / r, p.y *= r_max / r;
+      gather_hemisphere(eye.world_from_eye() * p, n.vector(), kIndirectRays, 0.5, 0.5, cache.node_values(node));
+    });
+  }
+
+  // The iris's irradiance from all lights, direct through the cornea and
+  // indirect, tabulated once per eye: a camera ray then looks up one value
+  // per group of lights (lights with one wavelength response add up)
+  // instead of every light's cache. Nodes at half the spacing of the
+  // lights' own caches, out to where an iris point's cell ends.
+  void build_iris_light(int eye_index, int cache_resolution) {
+    const Eye& eye = scene_.eyes[eye_index];
+    const EyeModel& m = eye.model();
+    IrisGrid& table = iris_light_[eye_index];
+    if (lights_.empty()) return;
+    const std::vector<IrisIrradianceCache>& direct = iris_[eye_index];
+    table.resize(direct.front().half_size_mm(), 2 * cache_resolution - 1, group_electrons_.size());
+    const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
+    const double r_max = direct.front().half_size_mm() + 1.5 * table.step_mm;
+    tbb::parallel_for(0, table.side * table.side, [&](int node) {
+      const Point3 local = table.node_point(node, z);
+      if (std::hypot(local.x, local.y) > r_max) return;
+      const Point3 world = eye.world_from_eye() * local;
+      double* e = table.node_values(node);
+      for (std::size_t k = 0; k < lights_.size(); ++k) {
+        e[group_of_light_[k]] += direct[k].irradiance_w_m2(world) + iris_indirect_[eye_index].at(local, k);
+      }
+    });
+  }
+
+  // Radiance arriving along a ray leaving the iris, after one more
+  // diffuse reflection, times `weight`, per light into `e`.
+  void gather(const Ray& ray, int depth, double weight, double min_weight, double* e) const {
+    gather(ray, tracer_.intersect(ray), depth, weight, min_weight, e);
+  }
+  // The same, where the ray's first hit is known.
+  void gather(const Ray& ray, const Hit& hit, int depth, double weight, double min_weight, double* e) const {
+    const auto add = [&](std::size_t k, double radiance) { e[k] += radiance; };
+    switch (scattering_of(hit.surface)) {
+      case Scattering::diffuse:
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, weight * albedo, add);
+        return;
+      case Scattering::iris: {
+        const double albedo = diffuse_albedo(scene_, hit);
+        for (std::size_t k = 0; k < lights_.size(); ++k) {
+          add(k, weight * albedo * kInvPi * iris_[hit.eye][k].irradiance_w_m2(hit.point));
+        }
+        return;
+      }
+      case Scattering::interface: {
+        if (depth >= kMaxSpecularDepth) return;
+        const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+        const double w_t = weight * (1 - c.reflectance) * c.eta * c.eta, w_r = weight * c.reflectance;
+        if (c.transmitted && w_t > min_weight) {
+          gather({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w_t, min_weight, e);
+        }
+        if (c.reflected && w_r > min_weight) {
+          gather({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_r, min_weight, e);
+        }
+        return;
+      }
+      default:
+        return;  // the pupil (the eye's dark inside) or nothing
+    }
+  }
+
+  // Fresnel reflection and refraction at a corneal surface, both traced.
+  // Radiance crossing from index n2 into n1 scales by (n1 / n2)^2.
+  void interface(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
+                 const Primary* primary) const {
+    if (depth >= kMaxSpecularDepth) return;
+    const InterfaceCrossing c = cross_interface(scene_, ray, hit);
+    if (c.transmitted) {
+      const double w = weight * (1.0 - c.reflectance) * c.eta * c.eta;
+      if (w > kMinBranchWeight * 1e-3) {
+        trace({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w, out, primary);
+      }
+    }
+    // Which reflections are traced does not depend on the sample's share
+    // of its pixel's reflection; their weight does.
+    const double w_reflected = weight * c.reflectance;
+    const double share = primary ? primary->reflection_weight : 1.0;
+    if (w_reflected > kMinBranchWeight && c.reflected && share > 0) {
+      trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected * share, out, nullptr);
+    }
+  }
+
+  const Scene& scene_;
+  const Camera& camera_;
+  const RayTracer& tracer_;
+  std::vector<Light> lights_;
+  std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
+  std::vector<IrisGrid> iris_indirect_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: lights
+  // Lights with one wavelength response form a group (usually all of them).
+  std::vector<double> group_electrons_;        // [group]: electrons per unit radiance
+  std::vector<std::size_t> group_of_light_;    // [light]
+  std::vector<IrisGrid> iris_light_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: groups
+  std::uint64_t seed_ = 0;
+  std::unique_ptr<DiffuseCache> diffuse_;
+  std::unique_ptr<VisibilityCache> visibility_;
+};
+
+}  // namespace
+
+std::unique_ptr<PathIntegrator> make_fast_integrator(const Scene& scene, const Camera& camera,
+                                                     const RayTracer& tracer, const RenderOptions& options,
+                                                     const PixelRegion& traced) {
+  return std::make_unique<FastIntegrator>(scene, camera, tracer, options, traced);
+}
+
+}  // namespace purkinje::renderer

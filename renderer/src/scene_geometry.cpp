@@ -1,0 +1,243 @@
+#include "scene_geometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace purkinje::renderer {
+
+const char* to_string(Surface s) {
+  switch (s) {
+    case Surface::none: return "none";
+    case Surface::skin: return "skin";
+    case Surface::sclera: return "sclera";
+    case Surface::iris: return "iris";
+    case Surface::pupil: return "pupil";
+    case Surface::cornea_anterior: return "cornea_anterior";
+    case Surface::cornea_posterior: return "cornea_posterior";
+    case Surface::mesh: return "mesh";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr double kLidClearanceMm = 0.3;
+constexpr double kFaceHeightFraction = 0.45;
+constexpr double kFaceRadiusMm = 150.0;
+
+std::string eye_label(int index, const EyeModel& m) {
+  return "RayTracer: eyes[" + std::to_string(index) + "] (" + m.name + ")";
+}
+
+[[noreturn]] void fail_eye(int index, const EyeModel& m, const std::string& what) {
+  throw std::invalid_argument(eye_label(index, m) + ": " + what);
+}
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+// The scene reader's checks, repeated for meshes built in code: an index
+// out of range would read beyond the vertices, a vertex beyond float range
+// would break Embree's bounds.
+void check_mesh(int index, const Mesh& mesh) {
+  const auto fail = [&](const std::string& what) {
+    throw std::invalid_argument("RayTracer: meshes[" + std::to_string(index) + "] (" + mesh.name +
+                                "): " + what);
+  };
+  constexpr double kLimitMm = 1e6;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Point3& p = mesh.vertices[i];
+    if (!p.is_finite() || std::abs(p.x) > kLimitMm || std::abs(p.y) > kLimitMm || std::abs(p.z) > kLimitMm) {
+      fail("vertex " + std::to_string(i) + " (" + number(p.x) + ", " + number(p.y) + ", " + number(p.z) +
+           ") must be finite and within +-1e6 mm");
+    }
+  }
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (std::uint32_t v : mesh.triangles[i]) {
+      if (v >= mesh.vertices.size()) {
+        fail("triangle " + std::to_string(i) + " has vertex index " + std::to_string(v) + ", but the mesh has " +
+             std::to_string(mesh.vertices.size()) + " vertices");
+      }
+    }
+  }
+}
+
+template <class Shape>
+void add(SurfaceList& list, Surface kind, int eye, const std::shared_ptr<const Frame>& frame,
+         Shape shape) {
+  list.push_back(std::make_unique<Placed<Shape>>(kind, eye, frame, std::move(shape)));
+}
+
+void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
+  const EyeModel& m = eye.model();
+  const auto world_from_eye = std::make_shared<const Frame>(eye.world_from_eye());
+  const double R = m.anterior_cornea.radius_mm;
+  const double d_L = m.limbus_depth_mm();
+  const double r_L = m.limbus_radius_mm;
+  if (!(R > 0) || !std::isfinite(R)) fail_eye(index, m, "anterior radius_mm = " + number(R) + ": must be > 0");
+  if (!(r_L > 0) || !(d_L > 0) || !std::isfinite(d_L)) {
+    fail_eye(index, m, "limbus_radius_mm = " + number(r_L) +
+                           ": the anterior cornea does not reach a limbus of that radius");
+  }
+  const double z_L = R - d_L;
+  add(list, Surface::cornea_anterior, index, world_from_eye,
+      surfaces::ConicoidCap{R, 1.0 + m.anterior_cornea.asphericity, R, d_L});
+
+  if (m.posterior_cornea) {
+    const PosteriorCornea& p = *m.posterior_cornea;
+    const double depth = d_L - p.thickness_mm;
+    if (!(depth > 0) || !(p.surface.radius_mm > 0)) {
+      fail_eye(index, m, "posterior cornea (thickness_mm = " + number(p.thickness_mm) +
+                             ", radius_mm = " + number(p.surface.radius_mm) +
+                             ") must have a positive radius and start in front of the limbus plane (" +
+                             number(d_L) + " mm deep)");
+    }
+    add(list, Surface::cornea_posterior, index, world_from_eye,
+        surfaces::ConicoidCap{p.surface.radius_mm, 1.0 + p.surface.asphericity,
+                              R - p.thickness_mm, depth});
+  }
+
+  // Sclera and the limbal band between it and the cornea's edge.
+  const double R_s = m.sclera_radius_mm;
+  const double z_c = R - m.rotation_center_depth_mm;
+  const double h = z_L - z_c;  // height of the limbus plane above the centre of rotation
+  if (!(R_s > 0) || !(h > 0)) {
+    fail_eye(index, m, "sclera_radius_mm = " + number(R_s) + " and rotation_center_depth_mm = " +
+                           number(m.rotation_center_depth_mm) +
+                           ": the sclera must have a positive radius and the limbus plane must lie "
+                           "in front of the centre of rotation");
+  }
+  double z_seam;  // the sphere is kept behind this plane
+  if (R_s >= r_L && std::sqrt(R_s * R_s - r_L * r_L) < h) {
+    z_seam = z_c + std::sqrt(R_s * R_s - r_L * r_L);
+    add(list, Surface::sclera, index, world_from_eye, surfaces::Cylinder{r_L, z_seam, z_L});
+  } else if (h < R_s) {
+    z_seam = z_L;
+    const double rho = std::sqrt(R_s * R_s - h * h);
+    surfaces::PlaneRegion annulus;
+    annulus.z_mm = z_L;
+    annulus.outer_radius_mm = std::max(rho, r_L);
+    annulus.hole_radius_mm = std::min(rho, r_L);
+    add(list, Surface::sclera, index, world_from_eye, std::move(annulus));
+  } else {
+    fail_eye(index, m, "sclera_radius_mm = " + number(R_s) +
+                           " is smaller than the limbus radius and does not reach the limbus plane: "
+                           "the sclera cannot be joined to the cornea");
+  }
+  add(list, Surface::sclera, index, world_from_eye,
+      surfaces::SphereBelowPlane{{0, 0, z_c}, R_s, z_seam});
+
+  // Iris and pupil, the iris reaching out to the shell.
+  const double z_I = R - m.iris_depth_mm;
+  double wall = 0;
+  if (z_I <= z_seam) {
+    if (std::abs(z_I - z_c) < R_s) wall = std::sqrt(R_s * R_s - (z_I - z_c) * (z_I - z_c));
+  } else if (z_I <= z_L) {
+    wall = r_L;  // beside the cylindrical band
+  }
+  const double r_p = m.pupil_radius_mm;
+  surfaces::PlaneRegion iris;
+  iris.z_mm = z_I;
+  iris.outer_radius_mm = std::max(m.iris_radius_mm, wall);
+  iris.hole_x_mm = m.pupil_decentration_x_mm;
+  iris.hole_y_mm = m.pupil_decentration_y_mm;
+  iris.hole_radius_mm = r_p;
+  add(list, Surface::iris, index, world_from_eye, std::move(iris));
+  if (r_p > 0) {
+    surfaces::PlaneRegion pupil;
+    pupil.z_mm = z_I;
+    pupil.outer_x_mm = m.pupil_decentration_x_mm;
+    pupil.outer_y_mm = m.pupil_decentration_y_mm;
+    pupil.outer_radius_mm = r_p;
+    add(list, Surface::pupil, index, world_from_eye, std::move(pupil));
+  }
+}
+
+void add_lids(SurfaceList& list, int index, const Scene& scene) {
+  const Eye& eye = scene.eyes[index];
+  const EyeAppearance& look = eye.appearance();
+  const Eyelids& lids = *look.eyelids;
+  const UnitVector3 z = look.head_forward;
+  const auto y = UnitVector3::try_normalize(look.head_up.vector() - z.vector() * dot(look.head_up, z));
+  if (!y) fail_eye(index, eye.model(), "appearance head_up is parallel to head_forward");
+  const UnitVector3 x = UnitVector3::normalize(cross(*y, z));
+  const Pose head_pose(Rotation::from_columns(x, *y, z), eye.rotation_center().from_origin());
+  const Pose head_from_world = head_pose.inverse();
+  const auto world_from_head = std::make_shared<const Frame>(head_pose);
+
+  const double R_l = eye.model().rotation_center_depth_mm + kLidClearanceMm;
+  const double z_f = kFaceHeightFraction * R_l;
+  surfaces::EyelidSphere lid;
+  lid.radius_mm = R_l;
+  lid.min_z_mm = z_f;
+  lid.max_z_mm = R_l;
+  lid.opening.opening = lids.opening;
+  lid.opening.upper_margin_mm = lids.upper_margin_mm;
+  lid.opening.lower_margin_mm = lids.lower_margin_mm;
+  lid.opening.closing_line_mm = lids.closing_line_mm;
+  lid.opening.half_width_mm = lids.half_width_mm;
+  // The margins follow the eye's vertical rotation (Eyelids in appearance.h).
+  for (const auto& [key, gain] : {std::pair{"upper_gain_upgaze", lids.upper_gain_upgaze},
+                                  std::pair{"upper_gain_downgaze", lids.upper_gain_downgaze},
+                                  std::pair{"lower_gain_upgaze", lids.lower_gain_upgaze},
+                                  std::pair{"lower_gain_downgaze", lids.lower_gain_downgaze}}) {
+    if (!(gain >= 0 && gain <= 2)) {
+      fail_eye(index, eye.model(), std::string("eyelids ") + key + " = " + number(gain) + ": must be in [0, 2]");
+    }
+  }
+  const double elevation = surfaces::eye_elevation_rad(head_from_world * eye.optical_axis().vector());
+  const surfaces::MarginTurns turns = surfaces::margin_turns(
+      lids.upper_gain_upgaze, lids.upper_gain_downgaze, lids.lower_gain_upgaze, lids.lower_gain_downgaze, elevation);
+  lid.opening.upper_turn = surfaces::MarginTurn::by(turns.upper_rad);
+  lid.opening.lower_turn = surfaces::MarginTurn::by(turns.lower_rad);
+  add(list, Surface::skin, index, world_from_head, lid);
+  // The socket: the rest of the sphere, behind the face, without an
+  // opening. Near the canthi the opening reaches past the eyeball's
+  // silhouette; without the socket those rays would see the background.
+  surfaces::EyelidSphere socket;
+  socket.radius_mm = R_l;
+  socket.min_z_mm = -R_l;
+  socket.max_z_mm = z_f;
+  socket.opening.opening = 0.0;  // contains no point
+  add(list, Surface::skin, index, world_from_head, socket);
+
+  surfaces::PlaneRegion face;
+  face.z_mm = z_f;
+  face.outer_radius_mm = kFaceRadiusMm;
+  face.hole_radius_mm = std::sqrt(R_l * R_l - z_f * z_f);
+  for (std::size_t j = 0; j < scene.eyes.size(); ++j) {
+    if (static_cast<int>(j) == index) continue;
+    const Vector3 other = (head_from_world * scene.eyes[j].rotation_center()).from_origin();
+    const double gap = other.norm();
+    if (!(gap > 1e-9)) continue;  // the same place: nothing to split
+    face.cuts.push_back({other / gap, 0.5 * gap + surfaces::kSeamOverlapMm});
+  }
+  add(list, Surface::skin, index, world_from_head, std::move(face));
+}
+
+}  // namespace
+
+SceneGeometry build_scene_geometry(const Scene& scene) {
+  SceneGeometry geometry;
+  for (std::size_t i = 0; i < scene.eyes.size(); ++i) {
+    const int index = static_cast<int>(i);
+    add_eyeball(geometry.surfaces, index, scene.eyes[i]);
+    if (scene.eyes[i].appearance().eyelids) add_lids(geometry.surfaces, index, scene);
+  }
+  for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
+    check_mesh(static_cast<int>(i), scene.meshes[i]);
+    if (scene.meshes[i].triangles.empty()) continue;  // nothing to meet
+    geometry.meshes.push_back(std::make_unique<PlacedMesh>(static_cast<int>(i), scene.meshes[i]));
+  }
+  return geometry;
+}
+
+}  // namespace purkinje::renderer

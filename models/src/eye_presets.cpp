@@ -81,11 +81,30 @@ EyeModel navarro_eye() {
   return m;
 }
 
+namespace {
+
+struct Preset {
+  const char* name;
+  EyeModel (*make)();
+};
+constexpr Preset kPresets[] = {{"keratometric", keratometric_eye}, {"le_grand", le_grand_eye}, {"navarro", navarro_eye}};
+
+}  // namespace
+
 std::optional<EyeModel> eye_model_preset(const std::string& name) {
-  if (name == "keratometric") return keratometric_eye();
-  if (name == "le_grand") return le_grand_eye();
-  if (name == "navarro") return navarro_eye();
+  for (const Preset& p : kPresets) {
+    if (name == p.name) return p.make();
+  }
   return std::nullopt;
+}
+
+const std::vector<std::string>& eye_model_preset_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const Preset& p : kPresets) out.emplace_back(p.name);
+    return out;
+  }();
+  return names;
 }
 
 }  // namespace purkinje

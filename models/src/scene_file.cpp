@@ -583,120 +583,11 @@ Mesh read_mesh(Object& m, std::size_t index, const std::filesystem::path& folder
 
 // ------------------------------------------------------------------- eyes
 
-// Depth below the apex of a conicoid at distance r from its axis; nullopt
-// where the surface does not reach r.
-std::optional<double> sag_mm(const Conicoid& s, double r) {
-  const double disc = s.radius_mm * s.radius_mm - (1.0 + s.asphericity) * r * r;
-  if (disc < 0) return std::nullopt;
-  return r * r / (s.radius_mm + std::sqrt(disc));  // cancellation-free root
-}
-
-// The largest distance from the axis over which a conicoid stays a
-// single-valued graph; infinite for paraboloids and hyperboloids.
-double graph_radius_mm(const Conicoid& s) {
-  if (s.asphericity <= -1.0) return INFINITY;
-  return s.radius_mm / std::sqrt(1.0 + s.asphericity);
-}
-
-// Anatomy that no single key can get wrong: the keys interact.
+// Anatomy that no single key can get wrong (the keys interact): the eye
+// model's own rules (anatomy_problem in eye.h), reported at their keys.
 void check_eye_model(const EyeModel& m, const Location& eye) {
-  const double limbus = m.limbus_radius_mm;
-  const Conicoid& front = m.anterior_cornea;
-  if (!(limbus < graph_radius_mm(front))) {
-    eye.child("cornea").child("limbus_radius_mm")
-        .fail_number(limbus, "must be < radius_mm / sqrt(1 + asphericity) = " +
-                                 format_number(graph_radius_mm(front)) +
-                                 " mm, where the cornea stops being a single-valued cap");
-  }
-
-  // The inner surface of the cornea, as depth below the anterior apex.
-  auto inner_depth = [&](double r) -> std::optional<double> {
-    if (!m.posterior_cornea) return sag_mm(front, r);
-    const auto back = sag_mm(m.posterior_cornea->surface, r);
-    if (!back) return std::nullopt;
-    return m.posterior_cornea->thickness_mm + *back;
-  };
-
-  if (m.posterior_cornea) {
-    const PosteriorCornea& p = *m.posterior_cornea;
-    const Location where = eye.child("posterior_cornea");
-    if (!(limbus < graph_radius_mm(p.surface))) {
-      where.child("radius_mm").fail_number(
-          p.surface.radius_mm, "the posterior cornea must reach the limbus (limbus_radius_mm = " +
-                                   format_number(limbus) + ") as a single-valued surface");
-    }
-    // Sampling finely is exact enough here: the two sags are smooth and a
-    // crossing that fits between samples would be thinner than a micron.
-    constexpr int kSamples = 2000;
-    for (int i = 0; i <= kSamples; ++i) {
-      const double r = limbus * i / kSamples;
-      const double thickness = *inner_depth(r) - *sag_mm(front, r);
-      if (!(thickness > 0)) {
-        where.child("thickness_mm").fail_number(
-            p.thickness_mm, "the posterior cornea crosses the anterior one " + format_number(r) +
-                                " mm from the axis, inside the limbus (" + format_number(limbus) +
-                                " mm)");
-      }
-    }
-  }
-
-  const Location iris = eye.child("iris");
-  const Location pupil = eye.child("pupil");
-  if (!(m.iris_radius_mm <= limbus)) {
-    iris.child("radius_mm").fail_number(
-        m.iris_radius_mm, "must be <= cornea.limbus_radius_mm (" + format_number(limbus) + ")");
-  }
-  if (!(m.pupil_radius_mm < m.iris_radius_mm)) {
-    pupil.child("radius_mm").fail_number(
-        m.pupil_radius_mm, "must be < iris.radius_mm (" + format_number(m.iris_radius_mm) + ")");
-  }
-  const double decentration = std::hypot(m.pupil_decentration_x_mm, m.pupil_decentration_y_mm);
-  const double pupil_edge = m.pupil_radius_mm + decentration;
-  if (!(pupil_edge < m.iris_radius_mm)) {
-    pupil.child("decentration_mm").fail(
-        "[" + format_number(m.pupil_decentration_x_mm) + ", " +
-            format_number(m.pupil_decentration_y_mm) + "]",
-        "moves the pupil's edge to " + format_number(pupil_edge) +
-            " mm from the axis, beyond iris.radius_mm (" + format_number(m.iris_radius_mm) + ")");
-  }
-  // The pupil must sit in the aqueous humour, behind the cornea's inner
-  // surface, or no refracted path reaches it.
-  const auto inner_at_pupil = inner_depth(pupil_edge);
-  if (!inner_at_pupil || !(m.iris_depth_mm > *inner_at_pupil)) {
-    iris.child("depth_mm").fail_number(
-        m.iris_depth_mm, "puts the pupil's edge (" + format_number(pupil_edge) +
-                             " mm from the axis) in front of the cornea's inner surface" +
-                             (inner_at_pupil ? " (" + format_number(*inner_at_pupil) + " mm deep there)"
-                                             : std::string()));
-  }
-  if (!(m.iris_depth_mm < m.rotation_center_depth_mm)) {
-    iris.child("depth_mm").fail_number(
-        m.iris_depth_mm, "must be < rotation_center_depth_mm (" +
-                             format_number(m.rotation_center_depth_mm) + ")");
-  }
-  if (!(m.sclera_radius_mm < m.rotation_center_depth_mm)) {
-    eye.child("sclera_radius_mm")
-        .fail_number(m.sclera_radius_mm,
-                     "must be < rotation_center_depth_mm (" +
-                         format_number(m.rotation_center_depth_mm) +
-                         ") so that the cornea stands out of the sclera");
-  }
-  // The sclera must reach the limbus plane, or nothing can join the
-  // cornea's edge to the eyeball and light would leak into the eye.
-  const double limbus_depth = *sag_mm(front, limbus);
-  if (!(limbus_depth < m.rotation_center_depth_mm)) {
-    eye.child("rotation_center_depth_mm")
-        .fail_number(m.rotation_center_depth_mm,
-                     "must be > the limbus's depth behind the corneal apex (" +
-                         format_number(limbus_depth) + " mm)");
-  }
-  const double limbus_above_center = m.rotation_center_depth_mm - limbus_depth;
-  if (!(limbus_above_center < m.sclera_radius_mm)) {
-    eye.child("sclera_radius_mm")
-        .fail_number(m.sclera_radius_mm,
-                     "must be > " + format_number(limbus_above_center) +
-                         " mm, the limbus plane's distance from the centre of rotation, so that the "
-                         "sclera reaches the cornea's edge");
+  if (const std::optional<AnatomyProblem> problem = anatomy_problem(m)) {
+    eye.child(problem->key).fail(problem->value, problem->rule);
   }
 }
 
@@ -704,7 +595,7 @@ EyeModel read_eye_model(Object& e) {
   const std::string preset = e.get_or<std::string>("model", "keratometric");
   auto found = eye_model_preset(preset);
   if (!found) {
-    e.required("model").fail("unknown eye model (valid: keratometric, le_grand, navarro)");
+    e.required("model").fail("unknown eye model (valid: " + join(eye_model_preset_names()) + ")");
   }
   EyeModel m = *found;
 

@@ -79,14 +79,14 @@ void add(SurfaceList& list, Surface kind, int eye, const std::shared_ptr<const F
 void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
   const EyeModel& m = eye.model();
   const auto world_from_eye = std::make_shared<const Frame>(eye.world_from_eye());
+  // The eye model's own rules, as the scene reader applies them: an eye
+  // built in code meets them here.
+  if (const std::optional<AnatomyProblem> problem = anatomy_problem(m)) {
+    fail_eye(index, m, problem->key + " = " + problem->value + ": " + problem->rule);
+  }
   const double R = m.anterior_cornea.radius_mm;
   const double d_L = m.limbus_depth_mm();
   const double r_L = m.limbus_radius_mm;
-  if (!(R > 0) || !std::isfinite(R)) fail_eye(index, m, "anterior radius_mm = " + number(R) + ": must be > 0");
-  if (!(r_L > 0) || !(d_L > 0) || !std::isfinite(d_L)) {
-    fail_eye(index, m, "limbus_radius_mm = " + number(r_L) +
-                           ": the anterior cornea does not reach a limbus of that radius");
-  }
   const double z_L = R - d_L;
   add(list, Surface::cornea_anterior, index, world_from_eye,
       surfaces::ConicoidCap{R, 1.0 + m.anterior_cornea.asphericity, R, d_L});
@@ -94,12 +94,6 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
   if (m.posterior_cornea) {
     const PosteriorCornea& p = *m.posterior_cornea;
     const double depth = d_L - p.thickness_mm;
-    if (!(depth > 0) || !(p.surface.radius_mm > 0)) {
-      fail_eye(index, m, "posterior cornea (thickness_mm = " + number(p.thickness_mm) +
-                             ", radius_mm = " + number(p.surface.radius_mm) +
-                             ") must have a positive radius and start in front of the limbus plane (" +
-                             number(d_L) + " mm deep)");
-    }
     add(list, Surface::cornea_posterior, index, world_from_eye,
         surfaces::ConicoidCap{p.surface.radius_mm, 1.0 + p.surface.asphericity,
                               R - p.thickness_mm, depth});
@@ -108,18 +102,14 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
   // Sclera and the limbal band between it and the cornea's edge.
   const double R_s = m.sclera_radius_mm;
   const double z_c = R - m.rotation_center_depth_mm;
-  const double h = z_L - z_c;  // height of the limbus plane above the centre of rotation
-  if (!(R_s > 0) || !(h > 0)) {
-    fail_eye(index, m, "sclera_radius_mm = " + number(R_s) + " and rotation_center_depth_mm = " +
-                           number(m.rotation_center_depth_mm) +
-                           ": the sclera must have a positive radius and the limbus plane must lie "
-                           "in front of the centre of rotation");
-  }
+  // Height of the limbus plane above the centre of rotation: 0 < h < R_s
+  // (anatomy_problem).
+  const double h = z_L - z_c;
   double z_seam;  // the sphere is kept behind this plane
   if (R_s >= r_L && std::sqrt(R_s * R_s - r_L * r_L) < h) {
     z_seam = z_c + std::sqrt(R_s * R_s - r_L * r_L);
     add(list, Surface::sclera, index, world_from_eye, surfaces::Cylinder{r_L, z_seam, z_L});
-  } else if (h < R_s) {
+  } else {
     z_seam = z_L;
     const double rho = std::sqrt(R_s * R_s - h * h);
     surfaces::PlaneRegion annulus;
@@ -127,10 +117,6 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
     annulus.outer_radius_mm = std::max(rho, r_L);
     annulus.hole_radius_mm = std::min(rho, r_L);
     add(list, Surface::sclera, index, world_from_eye, std::move(annulus));
-  } else {
-    fail_eye(index, m, "sclera_radius_mm = " + number(R_s) +
-                           " is smaller than the limbus radius and does not reach the limbus plane: "
-                           "the sclera cannot be joined to the cornea");
   }
   add(list, Surface::sclera, index, world_from_eye,
       surfaces::SphereBelowPlane{{0, 0, z_c}, R_s, z_seam});

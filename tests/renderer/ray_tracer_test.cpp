@@ -766,6 +766,26 @@ TEST(RayTracer, RejectsEyelidGainsOutsideZeroToTwo) {
   EXPECT_THROW(RayTracer(scene_of({turned_eye_with_lids(lids, 0, 0)})), std::invalid_argument);
 }
 
+// An eye built in code meets the scene reader's anatomy rules
+// (anatomy_problem): a sclera too small to reach the limbus plane, which
+// the keratometric eye's limbus (2.698 mm deep, 13.5 - 2.698 = 10.80 mm
+// in front of the centre of rotation) needs.
+TEST(RayTracer, RefusesAnEyeBuiltInCodeThatBreaksTheAnatomyRules) {
+  EyeModel m = keratometric_eye();
+  m.sclera_radius_mm = 10.0;
+  const std::optional<AnatomyProblem> problem = anatomy_problem(m);
+  ASSERT_TRUE(problem);
+  EXPECT_EQ(problem->key, "sclera_radius_mm");
+  try {
+    RayTracer tracer(scene_of({Eye::with_cornea_center(m, {0, 0, 600}, UnitVector3::unit_z())}));
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "RayTracer: eyes[0] (keratometric): sclera_radius_mm = 10: " + problem->rule);
+    EXPECT_NE(problem->rule.find("must be > 10.80"), std::string::npos) << problem->rule;
+  }
+}
+
 TEST(RayTracer, TheFacePlaneSurroundsTheLidsOutTo150Millimetres) {
   const Eye eye = eye_with_lids(Eyelids{});
   const RayTracer tracer(scene_of({eye}));

@@ -10,6 +10,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "purkinje/models/appearance.h"
 #include "purkinje/models/geometry.h"
@@ -63,6 +64,25 @@ EyeModel le_grand_eye();      // two spherical surfaces (7.8 / 6.5 mm, 1.3771 / 
 EyeModel navarro_eye();       // two aspheric surfaces (Q = -0.26 / 0), Navarro 1985
 // Looks a preset up by name ("keratometric", "le_grand", "navarro").
 std::optional<EyeModel> eye_model_preset(const std::string& name);
+// The names eye_model_preset knows, in that order.
+const std::vector<std::string>& eye_model_preset_names();
+
+// A rule of an eye model's anatomy that the model breaks: the key as the
+// scene format names it under an eye ("cornea.limbus_radius_mm"), its value
+// as check::format_number writes it, and the rule.
+struct AnatomyProblem {
+  std::string key;
+  std::string value;
+  std::string rule;
+};
+// The first rule `m` breaks, or nothing: sizes positive and finite, a
+// single-valued corneal cap out to the limbus, a posterior cornea behind
+// the anterior one everywhere inside the limbus and starting in front of
+// its plane, iris within the limbus and pupil within the iris, the pupil
+// behind the cornea's inner surface, and a sclera that reaches the
+// limbus from a centre of rotation behind it. The scene reader reports
+// it at the eye's key; the renderer refuses an eye built in code with it.
+std::optional<AnatomyProblem> anatomy_problem(const EyeModel& m);
 
 // Optical axis from yaw and pitch in world coordinates (radians): yaw = pitch
 // = 0 looks along world -z; yaw > 0 turns toward +x; pitch > 0 turns up (-y).

@@ -1,4 +1,5 @@
 #include "purkinje/models/camera.h"
+#include "purkinje/models/check.h"
 
 #include <cmath>
 #include <sstream>
@@ -10,21 +11,14 @@ namespace purkinje {
 namespace {
 
 std::string describe(const Point3& p) {
-  std::ostringstream out;
-  out.precision(17);
-  out << "(" << p.x << ", " << p.y << ", " << p.z << ")";
-  return out.str();
+  using check::format_number;
+  return "(" + format_number(p.x) + ", " + format_number(p.y) + ", " + format_number(p.z) + ")";
 }
 
 std::string describe(const Vector3& v) { return describe(Point3::origin() + v); }
 
 void require_positive(const std::string& what, double value) {
-  if (!(value > 0) || !std::isfinite(value)) {
-    std::ostringstream out;
-    out.precision(17);
-    out << what << " = " << value << ": must be > 0 and finite";
-    throw std::invalid_argument(out.str());
-  }
+  if (!(value > 0) || !std::isfinite(value)) check::fail(what, value, "must be > 0 and finite");
 }
 
 // Distortion and its 2x2 Jacobian d(xd, yd)/d(x, y), for Newton's method.

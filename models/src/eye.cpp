@@ -1,4 +1,5 @@
 #include "purkinje/models/eye.h"
+#include "purkinje/models/check.h"
 
 #include <cmath>
 #include <sstream>
@@ -81,10 +82,8 @@ Eye Eye::fixating(EyeModel model, const Point3& rc, const Point3& target) {
   // The cornea centre moves with the eye; a target closer than twice the
   // rotation radius has no stable fixation for this model.
   if (distance(target, rc) <= 2.0 * std::abs(back) + model.anterior_cornea.radius_mm) {
-    std::ostringstream msg;
-    msg << "gaze target is " << distance(target, rc)
-        << " mm from the centre of rotation: too close to fixate";
-    throw std::invalid_argument(msg.str());
+    throw std::invalid_argument("gaze target is " + check::format_number(distance(target, rc)) +
+                                " mm from the centre of rotation: too close to fixate");
   }
   UnitVector3 o = UnitVector3::normalize(target - rc);
   for (int i = 0; i < 200; ++i) {

@@ -1,4 +1,5 @@
 #include "purkinje/models/geometry.h"
+#include "purkinje/models/check.h"
 
 #include <sstream>
 #include <stdexcept>
@@ -6,18 +7,17 @@
 namespace purkinje {
 
 void UnitVector3::throw_not_normalizable(const Vector3& v) {
-  std::ostringstream msg;
-  msg << "cannot normalize vector (" << v.x << ", " << v.y << ", " << v.z << ") of norm " << v.norm();
-  throw std::invalid_argument(msg.str());
+  using check::format_number;
+  throw std::invalid_argument("cannot normalize vector (" + format_number(v.x) + ", " + format_number(v.y) + ", " +
+                              format_number(v.z) + ") of norm " + format_number(v.norm()));
 }
 
 UnitVector3 UnitVector3::from(const Vector3& v) {
   const double n = v.norm();
   if (!(std::abs(n - 1.0) <= 1e-9)) {
-    std::ostringstream msg;
-    msg.precision(17);
-    msg << "not a unit vector: (" << v.x << ", " << v.y << ", " << v.z << ") has norm " << n;
-    throw std::invalid_argument(msg.str());
+    using check::format_number;
+    throw std::invalid_argument("not a unit vector: (" + format_number(v.x) + ", " + format_number(v.y) + ", " +
+                                format_number(v.z) + ") has norm " + format_number(n));
   }
   return UnitVector3(v);
 }

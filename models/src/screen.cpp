@@ -1,4 +1,5 @@
 #include "purkinje/models/screen.h"
+#include "purkinje/models/check.h"
 
 #include <cmath>
 #include <sstream>
@@ -9,15 +10,13 @@ namespace purkinje {
 Screen Screen::centered(const Point3& center, double width_mm, double height_mm, const UnitVector3& right,
                         const UnitVector3& down) {
   if (!(width_mm > 0 && height_mm > 0 && std::isfinite(width_mm) && std::isfinite(height_mm))) {
-    std::ostringstream out;
-    out << "Screen: size " << width_mm << " x " << height_mm << " mm: both must be > 0";
-    throw std::invalid_argument(out.str());
+    throw std::invalid_argument("Screen: size " + check::format_number(width_mm) + " x " +
+                                check::format_number(height_mm) + " mm: both must be > 0");
   }
   if (!(std::abs(dot(right, down)) < 1e-6)) {
-    std::ostringstream out;
-    out << "Screen: right and down meet at " << angle_between(right, down) * 180 / 3.14159265358979323846
-        << " deg: they must be perpendicular";
-    throw std::invalid_argument(out.str());
+    throw std::invalid_argument("Screen: right and down meet at " +
+                                check::format_number(angle_between(right, down) * 180 / 3.14159265358979323846) +
+                                " deg: they must be perpendicular");
   }
   return {center - (width_mm / 2) * right - (height_mm / 2) * down, right, down, width_mm, height_mm};
 }

@@ -52,6 +52,7 @@
 #include <utility>
 #include <vector>
 
+#include "purkinje/models/check.h"
 #include "scene_geometry.h"
 
 namespace purkinje::renderer {
@@ -217,11 +218,12 @@ bool clip_to_box(const Box& box, const Point3& o, const Vector3& d, double& t0, 
 
 [[noreturn]] [[gnu::cold]] [[gnu::noinline]] void throw_invalid_ray(const Point3& origin, const Vector3& direction,
                                                                 double t_min, double t_max) {
-  std::ostringstream msg;
-  msg << "RayTracer: invalid ray: origin (" << origin.x << ", " << origin.y << ", " << origin.z << "), direction ("
-      << direction.x << ", " << direction.y << ", " << direction.z << "), t_min " << t_min << ", t_max " << t_max
-      << ": coordinates must be finite and 0 <= t_min";
-  throw std::invalid_argument(msg.str());
+  using check::format_number;
+  throw std::invalid_argument("RayTracer: invalid ray: origin (" + format_number(origin.x) + ", " +
+                              format_number(origin.y) + ", " + format_number(origin.z) + "), direction (" +
+                              format_number(direction.x) + ", " + format_number(direction.y) + ", " +
+                              format_number(direction.z) + "), t_min " + format_number(t_min) + ", t_max " +
+                              format_number(t_max) + ": coordinates must be finite and 0 <= t_min");
 }
 
 // On every ray's path: the check inline, the message out of line.

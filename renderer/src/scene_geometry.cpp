@@ -1,4 +1,5 @@
 #include "scene_geometry.h"
+#include "purkinje/models/check.h"
 
 #include <algorithm>
 #include <cmath>
@@ -37,12 +38,7 @@ std::string eye_label(int index, const EyeModel& m) {
   throw std::invalid_argument(eye_label(index, m) + ": " + what);
 }
 
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
+using check::format_number;
 
 // The scene reader's checks, repeated for meshes built in code: an index
 // out of range would read beyond the vertices, a vertex beyond float range
@@ -56,7 +52,7 @@ void check_mesh(int index, const Mesh& mesh) {
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Point3& p = mesh.vertices[i];
     if (!p.is_finite() || std::abs(p.x) > kLimitMm || std::abs(p.y) > kLimitMm || std::abs(p.z) > kLimitMm) {
-      fail("vertex " + std::to_string(i) + " (" + number(p.x) + ", " + number(p.y) + ", " + number(p.z) +
+      fail("vertex " + std::to_string(i) + " (" + format_number(p.x) + ", " + format_number(p.y) + ", " + format_number(p.z) +
            ") must be finite and within +-1e6 mm");
     }
   }
@@ -176,7 +172,7 @@ void add_lids(SurfaceList& list, int index, const Scene& scene) {
                                   std::pair{"lower_gain_upgaze", lids.lower_gain_upgaze},
                                   std::pair{"lower_gain_downgaze", lids.lower_gain_downgaze}}) {
     if (!(gain >= 0 && gain <= 2)) {
-      fail_eye(index, eye.model(), std::string("eyelids ") + key + " = " + number(gain) + ": must be in [0, 2]");
+      fail_eye(index, eye.model(), std::string("eyelids ") + key + " = " + format_number(gain) + ": must be in [0, 2]");
     }
   }
   const double elevation = surfaces::eye_elevation_rad(head_from_world * eye.optical_axis().vector());

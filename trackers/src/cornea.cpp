@@ -1,4 +1,5 @@
 #include "purkinje/trackers/cornea.h"
+#include "purkinje/models/check.h"
 
 #include <Eigen/Dense>
 
@@ -21,6 +22,8 @@ namespace {
 // glints do not determine the unknowns at all.
 constexpr double kSingularCondition = 1e12;
 
+using check::format_number;
+// Warnings' numbers: three significant digits read better than every digit.
 std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", value);
@@ -29,7 +32,7 @@ std::string number(double value) {
 
 void check(const CorneaFitSettings& s) {
   const auto fail = [](const std::string& key, double value, const std::string& rule) {
-    throw std::invalid_argument("CorneaFitSettings: " + key + " = " + number(value) + ": " + rule);
+    throw std::invalid_argument("CorneaFitSettings: " + key + " = " + format_number(value) + ": " + rule);
   };
   if (!(s.cornea_radius_mm > 0 && s.cornea_radius_mm < 100)) {
     fail("cornea_radius_mm", s.cornea_radius_mm, "must be in (0, 100)");
@@ -188,7 +191,7 @@ GlintCounts count_glints(const std::vector<Camera>& cameras, const std::vector<I
     if (g.light < 0 || g.light >= static_cast<int>(lights.size())) bad("light", g.light, lights.size());
     for (const double sd : {g.sd_u_px, g.sd_v_px}) {
       if (!(sd >= 0 && std::isfinite(sd))) {
-        throw std::invalid_argument("fit_cornea: a glint's standard deviation (sd_u_px or sd_v_px) = " + number(sd) +
+        throw std::invalid_argument("fit_cornea: a glint's standard deviation (sd_u_px or sd_v_px) = " + format_number(sd) +
                                     ": must be finite and >= 0 (0: pixel_noise_px)");
       }
     }
@@ -389,12 +392,12 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
   check(s);
   if (s.cornea_asphericity != 0 && optical_axes.size() != starts.size()) {
     throw std::invalid_argument("fit_cornea: a conicoid cornea (cornea_asphericity = " +
-                                number(s.cornea_asphericity) + ") needs one optical axis per frame: " +
+                                format_number(s.cornea_asphericity) + ") needs one optical axis per frame: " +
                                 std::to_string(optical_axes.size()) + " for " + std::to_string(starts.size()) +
                                 " frames");
   }
   if (!(s.reject_beyond_sd >= 0)) {
-    throw std::invalid_argument("CorneaFitSettings: reject_beyond_sd = " + number(s.reject_beyond_sd) +
+    throw std::invalid_argument("CorneaFitSettings: reject_beyond_sd = " + format_number(s.reject_beyond_sd) +
                                 ": must be >= 0 (0: no rejection)");
   }
   std::vector<int> kept(glints.size());
@@ -452,7 +455,7 @@ CorneaFit fit_cornea(const std::vector<Camera>& cameras, const std::vector<Illum
 
 GlintObservation observation_of(const Glint& glint, int frame, int camera, double glint_sd_scale) {
   if (!(glint_sd_scale >= 0 && std::isfinite(glint_sd_scale))) {
-    throw std::invalid_argument("glint_sd_scale = " + number(glint_sd_scale) +
+    throw std::invalid_argument("glint_sd_scale = " + format_number(glint_sd_scale) +
                                 ": must be finite and >= 0 (0: the glints' own deviations are not used)");
   }
   GlintObservation o{frame, camera, glint.illuminator, glint.centre};

@@ -1,4 +1,5 @@
 #include "purkinje/trackers/scoring.h"
+#include "purkinje/models/check.h"
 
 #include <algorithm>
 #include <cmath>
@@ -300,11 +301,11 @@ Detections exact_detections(const std::vector<EyeInCameraTruth>& views) {
 
 Scorer::Scorer(const ScoringSettings& settings) {
   if (!(settings.match_radius_px > 0 && settings.match_radius_px <= 1000)) {
-    throw std::invalid_argument("ScoringSettings: match_radius_px = " + std::to_string(settings.match_radius_px) +
+    throw std::invalid_argument("ScoringSettings: match_radius_px = " + check::format_number(settings.match_radius_px) +
                                 ": must be in (0, 1000]");
   }
   if (!(settings.min_pupil_overlap >= 0 && settings.min_pupil_overlap <= 1)) {
-    throw std::invalid_argument("ScoringSettings: min_pupil_overlap = " + std::to_string(settings.min_pupil_overlap) +
+    throw std::invalid_argument("ScoringSettings: min_pupil_overlap = " + check::format_number(settings.min_pupil_overlap) +
                                 ": must be in [0, 1]");
   }
   score_.settings = settings;

@@ -62,7 +62,7 @@ void read_text_options(CalibrateRequest& request) {
 int run_calibrate(CalibrateRequest request) {
   read_text_options(request);
   refuse(check_output_folder(request.output_dir, {},
-                             {"calibration.txt", "calibration.json", "frames.csv", "gaze_error.png"},
+                             {"calibration.txt", "calibration.json", "calibration.csv", "frames.csv", "gaze_error.png"},
                              {request.scene_file}));
   const Scene rig = load_scene(request.scene_file);
   studies::check_calibration_rig(rig, request.scene_file, request);
@@ -79,11 +79,12 @@ int run_calibrate(CalibrateRequest request) {
     if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
     write_file_atomically(dir / "calibration.txt", text);
     write_file_atomically(dir / "calibration.json", studies::simulation_json(study.runs));
+    write_file_atomically(dir / "calibration.csv", studies::simulation_csv(study.runs));
     write_file_atomically(dir / "frames.csv", study.frames_csv);
     trackers::write_gaze_map(dir / "gaze_error.png", *rig.screen, {"model-based", "polynomial"}, study.panels);
   });
   std::cout << text << "\nwrote " << (dir / "calibration.txt").string()
-            << ", calibration.json, frames.csv and gaze_error.png\n";
+            << ", calibration.json, calibration.csv, frames.csv and gaze_error.png\n";
   return kOk;
 }
 
@@ -97,7 +98,7 @@ Command add_calibrate_command(CLI::App& app) {
                                 "calibration grid, then a test grid at its own place and at each head move;\n"
                                 "each frame is rendered and read by purkinje's detectors. The model-based method\n"
                                 "and the second-order polynomial are calibrated and scored against the truth.\n"
-                                "Writes DIR/calibration.txt, calibration.json, frames.csv and gaze_error.png\n"
+                                "Writes DIR/calibration.txt, calibration.json, calibration.csv, frames.csv and\ngaze_error.png "
                                 "(docs/calibration.md).\n\n") +
                     kExitCodes);
   calibrate->add_option("SCENE", request->scene_file, "Scene file with a screen")->required();

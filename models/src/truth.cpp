@@ -87,7 +87,11 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         view.pupil.ellipse_valid = true;
         view.pupil.ellipse = *ellipse;
       }
-      if (auto ellipse = fit_ellipse(visible_pixels)) {
+      if (visible_pixels.size() == ok_pixels.size()) {
+        // Nothing hidden: the same points, the same fit.
+        view.pupil.visible_ellipse_valid = view.pupil.ellipse_valid;
+        view.pupil.visible_ellipse = view.pupil.ellipse;
+      } else if (auto ellipse = fit_ellipse(visible_pixels)) {
         view.pupil.visible_ellipse_valid = true;
         view.pupil.visible_ellipse = *ellipse;
       }

@@ -90,6 +90,15 @@ std::string text_of(const Results::Value& value) {
   return out.str();
 }
 
+// A CSV cell: quoted, quotes doubled, when it holds a comma, a quote or a
+// line break (RFC 4180).
+std::string csv_cell(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
 }  // namespace
 
 std::string simulation_text(const std::vector<SimulationRun>& runs) {
@@ -120,6 +129,20 @@ std::string simulation_json(const std::vector<SimulationRun>& runs) {
     out["runs"].push_back(r);
   }
   return out.dump(2) + "\n";
+}
+
+std::string simulation_csv(const std::vector<SimulationRun>& runs) {
+  std::string out = "case,algorithm,key,value,unit\n";
+  const auto row = [&](const SimulationRun& run, const std::string& key, const std::string& value,
+                       const std::string& unit) {
+    out += csv_cell(run.case_name) + "," + csv_cell(run.algorithm) + "," + csv_cell(key) + "," + csv_cell(value) +
+           "," + csv_cell(unit) + "\n";
+  };
+  for (const SimulationRun& run : runs) {
+    if (run.error) row(run, "error", *run.error, "");
+    for (const Results::Entry& e : run.results.entries()) row(run, e.key, text_of(e.value), e.unit);
+  }
+  return out;
 }
 
 }  // namespace purkinje::studies

@@ -1,5 +1,5 @@
 // The simulation core: algorithms over cases, their results (every partial
-// one) as text and JSON, and an algorithm's failure recorded without
+// one) as text, JSON and CSV, and an algorithm's failure recorded without
 // stopping the others.
 
 #include <gtest/gtest.h>
@@ -83,6 +83,29 @@ TEST(Simulation, WritesEveryResultWithItsUnitAsTextAndJson) {
   // Keys in the order the algorithm added them.
   const nlohmann::ordered_json ordered = nlohmann::ordered_json::parse(simulation_json(runs));
   EXPECT_EQ(ordered["runs"][0]["results"].begin().key(), "frames");
+}
+
+// The CSV, expected line by line as written by hand: a row per result, the
+// list quoted (it holds commas), the failed run's message as its "error".
+TEST(Simulation, WritesEveryResultAsACsvRow) {
+  const Inventory inventory;
+  const RefusesBadCases picky;
+  const std::vector<SimulationRun> runs = run_simulation({&inventory, &picky}, cases());
+  EXPECT_EQ(simulation_csv(runs),
+            "case,algorithm,key,value,unit\n"
+            "two frames,inventory,frames,2,\n"
+            "two frames,inventory,first_scene,remote,\n"
+            "two frames,inventory,offset_mm,\"[1.5, -2.25, 0]\",mm\n"
+            "two frames,picky,ok,1,\n"
+            "bad,inventory,frames,1,\n"
+            "bad,inventory,first_scene,remote,\n"
+            "bad,inventory,offset_mm,\"[1.5, -2.25, 0]\",mm\n"
+            "bad,picky,error,cannot handle case 'bad',\n");
+  // A text with a quote and a line break stays one cell.
+  Results r;
+  r.add("note", "said \"no\"\nthen left");
+  const std::vector<SimulationRun> one = {{"c", "a", r, std::nullopt}};
+  EXPECT_EQ(simulation_csv(one), "case,algorithm,key,value,unit\nc,a,note,\"said \"\"no\"\"\nthen left\",\n");
 }
 
 TEST(Simulation, ResultsRefuseRepeatedKeysAndNumbersThatAreNotFinite) {

@@ -3,7 +3,7 @@
 // with one method that takes the frames of a case (one scene, or the same
 // rig with the eye in several places) and returns named results, every
 // partial result among them; the core runs a list of algorithms over a
-// list of cases and writes what they returned as text and JSON.
+// list of cases and writes what they returned as text, JSON and CSV.
 
 #include <optional>
 #include <string>
@@ -73,5 +73,10 @@ std::string simulation_text(const std::vector<SimulationRun>& runs);
 // For programs: {"runs": [{"case", "algorithm", "results": {key: value},
 // "units": {key: unit}, "error"}]}, keys in the order added.
 std::string simulation_json(const std::vector<SimulationRun>& runs);
+// For tables (pandas, R, a spreadsheet): one row per result,
+// "case,algorithm,key,value,unit", numbers as in the text (they read back
+// exactly), a list as "[a, b, c]"; a run that failed has one row with key
+// "error" and the message as its value. Cells are quoted as RFC 4180 says.
+std::string simulation_csv(const std::vector<SimulationRun>& runs);
 
 }  // namespace purkinje::studies

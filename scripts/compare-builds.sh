@@ -6,7 +6,13 @@
 # per build and the ratio new / old (images/s inverted: above 1 is
 # slower). Issue 22's bar ("within 3% of before") is read from it.
 #
+# MODE=instructions counts instructions instead (valgrind's callgrind,
+# one process per benchmark, each run for one iteration): no drift at
+# all, so a few percent show where wall-clock medians on a shared VM
+# swing by 15%; it sees neither cache misses nor threads' overlap.
+#
 #   bash scripts/compare-builds.sh OLD_REVISION [ROUNDS] [FILTER]
+#   MODE=instructions bash scripts/compare-builds.sh OLD_REVISION 1 [FILTER]
 #   (OLD_BENCH=path/to/purkinje_benchmarks skips building the old revision)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,6 +35,28 @@ fi
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DPURKINJE_BUILD_BENCHMARKS=ON > /dev/null
 cmake --build build/release --target purkinje_benchmarks > /dev/null
 new=build/release/benchmarks/purkinje_benchmarks
+
+if [[ "${MODE:-time}" == instructions ]]; then
+  echo "| benchmark | old instructions | new instructions | new / old |"
+  echo "|---|---|---|---|"
+  for name in $("$new" --benchmark_list_tests --benchmark_filter="$filter"); do
+    exact="^${name}\$"  # benchmark names hold no regex metacharacters but $
+    declare -A count=()
+    for column in old new; do
+      bench="$old"
+      [[ "$column" == new ]] && bench="$new"
+      log="$out/$column.callgrind.log"
+      valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bench" --benchmark_filter="$exact" \
+        --benchmark_min_time=0.000001 > "$log" 2>&1
+      count[$column]=$(sed -n 's/.*I *refs: *//p' "$log" | tr -d ,)
+      iterations=$(awk -v n="$name" '$1 == n {print $6}' "$log" | head -1)
+      [[ "$iterations" == 1 ]] || echo "warning: $name ran $iterations iterations in $column" >&2
+    done
+    python3 -c "import sys; o, n = int(sys.argv[2]), int(sys.argv[3]); print(f'| {sys.argv[1]} | {o:,} | {n:,} | {n / o:.4f} |')" \
+      "$name" "${count[old]}" "${count[new]}"
+  done
+  exit 0
+fi
 
 for round in $(seq 1 "$rounds"); do
   for column in old new; do

@@ -280,7 +280,7 @@ const std::filesystem::path& FileSet::temporary_of(const std::filesystem::path& 
 
 void FileSet::add(std::filesystem::path target, Writer writer) {
   if (!target.has_filename())
-    throw std::invalid_argument("FileSet: target \"" + target.string() + "\" names no file");
+    throw OutputError(target.string() + ": names a folder, not a file");
   if (!writer) throw std::invalid_argument("FileSet: " + target.string() + ": no writer");
   for (const Entry& e : entries_) {
     if (e.target.lexically_normal() == target.lexically_normal())

@@ -92,7 +92,7 @@ class R4Sequence {
 };
 
 // Radius of the iris plane's disc inside the eye's shell (the iris reaches
-// out to the sclera; see ray_tracer.cpp).
+// out to the sclera; see scene_geometry.h).
 double outer_radius(const EyeModel& m) {
   const double dz = m.rotation_center_depth_mm - m.iris_depth_mm;
   const double r2 = m.sclera_radius_mm * m.sclera_radius_mm - dz * dz;

@@ -37,10 +37,6 @@ const char* to_string(RenderMode mode) {
   return "unknown";
 }
 
-namespace {
-
-}  // namespace
-
 int edge_samples_per_pixel(const RenderOptions& options) {
   if (options.mode == RenderMode::reference) return options.samples_per_pixel;
   return std::max(options.samples_per_pixel, options.edge_samples_per_pixel);
@@ -250,21 +246,25 @@ PointSpread image_point_spread(const Scene& scene, const Camera& camera) {
 
 // Glints: explicit, from the solver's paths in the truth, imaged through
 // the same optics into `total` (and into each light's plane of `per_light`
-// when given), each described in `glints`.
-void image_glints(const Scene& scene, int camera_index, const SceneTruth& truth, const PointSpread& psf,
+// when given), each described in `glints`. A glint whose radiometry fails
+// (its beam's spread not found by finite differences: rare, never in the
+// recorded scenes) is not drawn, and its label says why: the labels must
+// not promise a glint the image lacks. The truth's only change after
+// compute_truth, since only rendering finds it.
+void image_glints(const Scene& scene, int camera_index, SceneTruth& truth, const PointSpread& psf,
                   ImagePlane& total, std::vector<ImagePlane>* per_light, std::vector<GlintImage>& glints) {
   const Camera& camera = scene.cameras[camera_index];
-  for (const EyeInCameraTruth& view : truth.views) {
+  for (EyeInCameraTruth& view : truth.views) {
     if (view.camera != camera_index) continue;
-    for (const GlintTruth& g : view.glints) {
+    for (GlintTruth& g : view.glints) {
       GlintImage image;
       image.eye = view.eye;
       image.illuminator = g.illuminator;
       image.status = g.status;
       const Illuminator& light = scene.illuminators[g.illuminator];
       if (g.status == PathStatus::ok) {
-        // An ok glint's reflection lies on the cap: its radiometry is ok too.
         image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection);
+        if (image.radiometry.status != PathStatus::ok) g.status = image.status = image.radiometry.status;
         image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm);
         if (image.electrons > 0 && std::isfinite(image.electrons)) {
           add_point_image(total, g.pixel.u, g.pixel.v, image.electrons, psf, image.radiometry.source_cov_px2);

@@ -54,6 +54,8 @@
 // triangle's front, (v1 - v0) x (v2 - v0), from the double vertices.
 //
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <vector>
 

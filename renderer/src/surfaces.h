@@ -1,6 +1,6 @@
 #pragma once
 // The exact shapes the ray tracer builds for each eye, each in its own
-// local frame (the eye frame or the head frame, see ray_tracer.cpp),
+// local frame (the eye frame or the head frame, see scene_geometry.h),
 // intersected in double precision. Free of Embree so that the math can be
 // tested alone and reused by other back ends.
 //

@@ -167,7 +167,8 @@ class VariationIndex {
   // this run's; then the index starts again from them (a line a kill cut
   // short would otherwise run into the next one appended).
   void start() {
-    if (plan_.request.resume && fs::exists(file_)) read_killed_run();
+    std::error_code ec;  // unreachable folders are the write's to report
+    if (plan_.request.resume && fs::exists(file_, ec)) read_killed_run();
     std::string start = kHeader;
     for (const auto& [k, line] : indexed_) start += line;
     write_file_atomically(file_, start);

@@ -138,6 +138,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"TruthOntoAFifo", "truth {W}/scene.json -o {W}/fifo", 3, "is a FIFO (named pipe): not replaced"},
         Case{"TruthOntoAFolder", "truth {W}/scene.json -o {W}/empty", 3, "is a folder: not replaced"},
         Case{"TruthOntoASymbolicLink", "truth {W}/scene.json -o {W}/link.txt", 3, "is a symbolic link: not replaced"},
+        Case{"TruthOntoAMissingFolderPath", "truth {W}/scene.json -o {W}/missing/", 3, "names a folder, not a file"},
         Case{"RenderIntoAFile", "render {W}/scene.json -o {W}/file.txt", 3, "exists and is not a folder"},
         Case{"RenderIntoADevice", "render {W}/scene.json -o /dev/null", 3, "exists and is not a folder"},
         Case{"RenderOverItsScene", "render {W}/remote_cam0.json -o {W}", 2, "is an input of this command"},

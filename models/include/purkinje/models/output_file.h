@@ -78,7 +78,7 @@ std::string unreplaceable(const std::filesystem::path& file);
 // A new, empty, hidden temporary beside `target`, created exclusively:
 // ".NAME.tmp.PID.N" in the target's folder (the same file system, so
 // renaming it onto the target is atomic). It is registered for removal
-// on SIGINT/SIGTERM until release_temporary(). Throws std::runtime_error
+// on SIGINT/SIGTERM until release_temporary(). Throws OutputError
 // naming the target when the folder does not take it.
 std::filesystem::path create_temporary(const std::filesystem::path& target);
 // The temporary was renamed into place or removed: no longer the signal

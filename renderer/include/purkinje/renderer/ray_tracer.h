@@ -15,7 +15,8 @@
 // and the rest of the lid sphere behind it as the eye's socket). Each of
 // the scene's meshes is an Embree triangle geometry whose hits are
 // recomputed in double precision from the mesh's own vertices.
-// Geometry and precision are documented in src/ray_tracer.cpp.
+// Geometry is documented in src/scene_geometry.h, precision in
+// src/ray_tracer.cpp.
 
 #include <limits>
 #include <memory>

@@ -74,9 +74,7 @@ int run_calibrate(CalibrateRequest request) {
   const fs::path dir(request.output_dir);
   const std::string text = studies::simulation_text(study.runs);
   writing([&] {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
+    create_output_folder(dir);
     write_file_atomically(dir / "calibration.txt", text);
     write_file_atomically(dir / "calibration.json", studies::simulation_json(study.runs));
     write_file_atomically(dir / "calibration.csv", studies::simulation_csv(study.runs));

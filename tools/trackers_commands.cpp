@@ -96,9 +96,8 @@ int write_outputs(const ScoreOutput& request, const trackers::Score& score,
   const fs::path dir(request.output_dir);
   const std::string table = trackers::score_table(score);
   writing([&] {
-    std::error_code ec;
-    fs::create_directories(dir / "overlays", ec);
-    if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder: " + ec.message());
+    create_output_folder(dir);
+    create_output_folder(dir / "overlays");
     write_file_atomically(dir / "score.txt", table);
     write_file_atomically(dir / "score.csv", trackers::score_csv(score));
     write_file_atomically(dir / "score.json", trackers::score_json(score));

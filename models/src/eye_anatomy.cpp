@@ -35,6 +35,11 @@ AnatomyProblem problem(std::string key, double value, std::string rule) {
 
 bool positive(double v) { return v > 0 && std::isfinite(v); }
 
+// pupil.decentration_mm as the scene file writes it.
+std::string decentration_text(const EyeModel& m) {
+  return "[" + format_number(m.pupil_decentration_x_mm) + ", " + format_number(m.pupil_decentration_y_mm) + "]";
+}
+
 // Sizes that must be positive before any rule between keys means anything
 // (the scene reader checks each key as it reads it; these catch models
 // built in code).
@@ -61,10 +66,7 @@ std::optional<AnatomyProblem> size_problem(const EyeModel& m) {
     return problem("pupil.radius_mm", m.pupil_radius_mm, "must be >= 0 and finite");
   }
   if (!std::isfinite(m.pupil_decentration_x_mm) || !std::isfinite(m.pupil_decentration_y_mm)) {
-    return AnatomyProblem{"pupil.decentration_mm",
-                          "[" + format_number(m.pupil_decentration_x_mm) + ", " +
-                              format_number(m.pupil_decentration_y_mm) + "]",
-                          "must be finite"};
+    return AnatomyProblem{"pupil.decentration_mm", decentration_text(m), "must be finite"};
   }
   if (!positive(m.sclera_radius_mm)) return problem("sclera_radius_mm", m.sclera_radius_mm, rule);
   if (!positive(m.rotation_center_depth_mm)) {
@@ -132,9 +134,7 @@ std::optional<AnatomyProblem> anatomy_problem(const EyeModel& m) {
   const double decentration = std::hypot(m.pupil_decentration_x_mm, m.pupil_decentration_y_mm);
   const double pupil_edge = m.pupil_radius_mm + decentration;
   if (!(pupil_edge < m.iris_radius_mm)) {
-    return AnatomyProblem{"pupil.decentration_mm",
-                          "[" + format_number(m.pupil_decentration_x_mm) + ", " +
-                              format_number(m.pupil_decentration_y_mm) + "]",
+    return AnatomyProblem{"pupil.decentration_mm", decentration_text(m),
                           "moves the pupil's edge to " + format_number(pupil_edge) +
                               " mm from the axis, beyond iris.radius_mm (" + format_number(m.iris_radius_mm) + ")"};
   }

@@ -212,6 +212,12 @@ void write_bytes(const std::filesystem::path& file, std::string_view bytes) {
   if (::close(fd) != 0) abandon(errno);
 }
 
+void create_output_folder(const std::filesystem::path& folder) {
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) throw OutputError(folder.string() + ": cannot create the output folder: " + ec.message());
+}
+
 void append_to_file(const std::filesystem::path& file, std::string_view line) {
   const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
   if (fd < 0) fail(file, std::string("cannot append: ") + errno_message(errno));

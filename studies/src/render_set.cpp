@@ -49,12 +49,6 @@ std::string variation_stem(const Scene& scene, std::size_t k, std::size_t count)
   return (scene.name.empty() ? std::string("scene") : scene.name) + "_v" + index;
 }
 
-void create_output_folder(const fs::path& dir) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw OutputError(dir.string() + ": cannot create the output folder: " + ec.message());
-}
-
 // Renders `cameras` of `scene` and writes their files under `stem_prefix`
 // as one all-or-nothing set: every camera is rendered before anything is
 // written, so a failure leaves no file at all.

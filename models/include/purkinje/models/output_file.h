@@ -65,6 +65,10 @@ class FileSet {
 // the system's reason.
 void write_bytes(const std::filesystem::path& file, std::string_view bytes);
 
+// Creates `folder` and its parents where missing; throws OutputError
+// naming it and the system's reason ("cannot create the output folder").
+void create_output_folder(const std::filesystem::path& folder);
+
 // Appends `line` to an existing file and flushes it to the disk (an index
 // that grows as a long run goes). Throws OutputError naming the file.
 void append_to_file(const std::filesystem::path& file, std::string_view line);

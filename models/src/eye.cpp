@@ -77,6 +77,11 @@ Eye Eye::fixating_from_cornea_center(EyeModel model, const Point3& c, const Poin
   return with_cornea_center(std::move(model), c, o);
 }
 
+Eye Eye::with_visual_axis(EyeModel model, const Point3& rc, const UnitVector3& visual_axis) {
+  const UnitVector3 o = optical_axis_for_visual_axis(model, visual_axis);
+  return with_rotation_center(std::move(model), rc, o);
+}
+
 Eye Eye::fixating(EyeModel model, const Point3& rc, const Point3& target) {
   const double back = model.rotation_center_depth_mm - model.anterior_cornea.radius_mm;
   // The cornea centre moves with the eye; a target closer than twice the

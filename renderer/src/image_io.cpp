@@ -159,20 +159,21 @@ void write_png(const std::filesystem::path& file, const SensorImage& image) {
   write_bytes(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
-void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>& planes) {
+void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>& planes, const ExrSettings& settings) {
   validate(planes);
   const int width = planes.front().plane.width;
   const int height = planes.front().plane.height;
   const std::size_t channels = planes.size();
   const std::size_t pixels = static_cast<std::size_t>(width) * height;
 
-  OIIO::ImageSpec spec(width, height, static_cast<int>(channels), OIIO::TypeDesc::FLOAT);
+  OIIO::ImageSpec spec(width, height, static_cast<int>(channels),
+                       settings.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
   spec.channelnames.clear();
   for (const NamedPlane& p : planes) spec.channelnames.push_back(p.name);
   // The default channel naming marks a fourth channel as alpha; none is.
   spec.alpha_channel = -1;
   spec.z_channel = -1;
-  spec.attribute("compression", "zip");
+  spec.attribute("compression", settings.compression);
   // OIIO stamps the current time as capDate unless a DateTime is given;
   // a null string counts as given and writes nothing, keeping the bytes
   // a function of the pixels alone.

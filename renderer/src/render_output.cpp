@@ -84,9 +84,12 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
   json render = json::object();
   render["camera"] = result.camera;
   render["camera_name"] = camera.name();
-  render["files"] = {{"image", files.image.filename().string()},
-                     {"exr", files.exr.filename().string()},
-                     {"labels", files.labels.filename().string()}};
+  json names = json::object();
+  if (!files.image.empty()) names["image"] = files.image.filename().string();
+  if (!files.exr.empty()) names["exr"] = files.exr.filename().string();
+  if (!files.segmentation.empty()) names["segmentation"] = files.segmentation.filename().string();
+  names["labels"] = files.labels.filename().string();
+  render["files"] = names;
   const json settings = settings_document(camera, options);  // named: items() does not keep a temporary alive
   for (const auto& [key, value] : settings.items()) render[key] = value;
   json glints = json::array();
@@ -118,27 +121,66 @@ std::string render_settings_json(const Scene& scene, int camera, const RenderOpt
   return settings_document(scene.cameras.at(static_cast<std::size_t>(camera)), options).dump();
 }
 
+std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions& options) {
+  std::vector<std::string> names = {"Y",      "electrons", "depth", "N.x",  "N.y",    "N.z",   "id",
+                                    "skin",   "sclera",    "iris",  "pupil", "cornea", "glint"};
+  if (options.per_light_glint_masks) {
+    for (const Illuminator& light : scene.illuminators) names.push_back("glint." + light.name);
+  }
+  return names;
+}
+
 RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std::string& stem,
-                       const Scene& scene, const RenderResult& result, const RenderOptions& options) {
-  RenderFiles files{dir / (stem + ".png"), dir / (stem + ".exr"), dir / (stem + ".json")};
-  auto planes = std::make_shared<std::vector<NamedPlane>>();
-  planes->push_back({"Y", result.radiance});
-  planes->push_back({"electrons", result.electrons});
-  for (const NamedPlane& p : result.aovs) planes->push_back(p);
-  auto sensor = std::make_shared<SensorImage>(result.sensor);
+                       const Scene& scene, const RenderResult& result, const RenderOptions& options,
+                       const ImageFileChoice& choice) {
+  RenderFiles files;
+  if (choice.image) files.image = dir / (stem + ".png");
+  if (choice.exr) files.exr = dir / (stem + ".exr");
+  if (choice.segmentation) files.segmentation = dir / (stem + "_classes.png");
+  files.labels = dir / (stem + ".json");
   auto labels = std::make_shared<json>(labels_document(scene, result, options, files));
-  set.add(files.image, [sensor](const std::filesystem::path& t) { write_png(t, *sensor); });
-  set.add(files.exr, [planes](const std::filesystem::path& t) { write_exr(t, *planes); });
+  if (!choice.labels_extra.empty()) {
+    for (const auto& [key, value] : json::parse(choice.labels_extra).items()) (*labels)[key] = value;
+  }
+  if (choice.image) {
+    auto sensor = std::make_shared<SensorImage>(result.sensor);
+    set.add(files.image, [sensor](const std::filesystem::path& t) { write_png(t, *sensor); });
+  }
+  if (choice.exr) {
+    auto planes = std::make_shared<std::vector<NamedPlane>>();
+    planes->push_back({"Y", result.radiance});
+    planes->push_back({"electrons", result.electrons});
+    for (const NamedPlane& p : result.aovs) planes->push_back(p);
+    if (!choice.exr_planes.empty()) {
+      std::vector<NamedPlane> chosen;
+      for (const std::string& name : choice.exr_planes) {
+        const auto it = std::find_if(planes->begin(), planes->end(), [&](const NamedPlane& p) { return p.name == name; });
+        if (it == planes->end()) throw std::invalid_argument("EXR plane \"" + name + "\": the render has no such plane");
+        chosen.push_back(std::move(*it));
+      }
+      *planes = std::move(chosen);
+    }
+    set.add(files.exr, [planes, settings = choice.exr_settings](const std::filesystem::path& t) {
+      write_exr(t, *planes, settings);
+    });
+  }
+  if (choice.segmentation) {
+    const auto id = std::find_if(result.aovs.begin(), result.aovs.end(), [](const NamedPlane& p) { return p.name == "id"; });
+    if (id == result.aovs.end()) throw std::logic_error("add_render: the render has no id plane");
+    auto classes = std::make_shared<ImagePlane>(id->plane);
+    set.add(files.segmentation, [classes](const std::filesystem::path& t) { write_class_png(t, *classes); });
+  }
   // Labels last, with the size and CRC-32 of the image files as written:
   // renamed into place after them, they tell a complete unit from one a
   // kill left half replaced (docs/labels.md).
-  set.add(files.labels, [labels, files, &set](const std::filesystem::path& t) {
+  set.add(files.labels, [labels, files, &set, indent = choice.indent_labels](const std::filesystem::path& t) {
     json& names = (*labels)["render"]["files"];
-    add_check(names, "image", set.temporary_of(files.image));
-    add_check(names, "exr", set.temporary_of(files.exr));
+    if (!files.image.empty()) add_check(names, "image", set.temporary_of(files.image));
+    if (!files.exr.empty()) add_check(names, "exr", set.temporary_of(files.exr));
+    if (!files.segmentation.empty()) add_check(names, "segmentation", set.temporary_of(files.segmentation));
     // `t` is FileSet's own temporary, flushed and renamed into place by it.
     std::ofstream out(t, std::ios::binary | std::ios::trunc);
-    out << labels->dump(2) << "\n";
+    out << labels->dump(indent ? 2 : -1) << "\n";
     out.close();
     if (!out) throw std::runtime_error(t.string() + ": cannot write the labels");
   });

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "purkinje/models/counter_random.h"
 #include "purkinje/renderer/sensor_model.h"  // uniform01, the public face of these streams
 
 namespace purkinje::renderer {
@@ -26,25 +27,6 @@ enum Stream : std::uint64_t {
   kPhotonStream = 4,      // reference: the photons through the cornea
   kSensorNoiseStream = 0x8000000000000001ull,
 };
-
-// splitmix64's finalizer: a bijection of 64-bit words with full avalanche.
-inline std::uint64_t mix64(std::uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-// The key of (seed, stream, index) in two steps, so that loops over pixels
-// hash the invariant part once. Each step is a bijection, so distinct
-// indices of one (seed, stream) never share a key.
-inline std::uint64_t stream_key(std::uint64_t seed, std::uint64_t stream) {
-  return mix64(mix64(seed + 0x9E3779B97F4A7C15ull) ^ (stream + 0x632BE59BD9B4E019ull));
-}
-inline std::uint64_t counter_key(std::uint64_t stream_key, std::uint64_t index) {
-  return mix64(stream_key ^ (index + 0xD1B54A32D192ED03ull));
-}
-
-inline double to_unit(std::uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }
 
 // Tables of Marsaglia and Tsang's ziggurat for the standard normal (2000,
 // "The ziggurat method for generating random variables"): 128 layers of

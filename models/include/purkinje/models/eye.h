@@ -106,6 +106,10 @@ class Eye {
   // As above, with the cornea centre held at `cornea_center`.
   static Eye fixating_from_cornea_center(EyeModel model, const Point3& cornea_center,
                                          const Point3& target);
+  // The eye rotated about `rotation_center` so that its visual axis (kappa
+  // applied) points along `visual_axis`; eye +x is kept perpendicular to
+  // the world's y (world_from_eye_rotation).
+  static Eye with_visual_axis(EyeModel model, const Point3& rotation_center, const UnitVector3& visual_axis);
 
   const EyeModel& model() const { return model_; }
   // Albedos, iris texture, eyelids: what the renderer needs beyond geometry.

@@ -20,14 +20,32 @@ using purkinje::OutputError;
 // values shifted to the most significant bits (so a 12-bit image looks
 // right in any viewer; value >> (16 - bits) recovers the DN).
 void write_png(const std::filesystem::path& file, const SensorImage& image);
-// OpenEXR, 32-bit float, zip, one channel per plane. OpenEXR stores the
+// How an EXR stores its planes: 32-bit or half floats, and the codec
+// (OpenEXR's names: "none", "rle", "zips", "zip", "piz", "pxr24", "b44",
+// "b44a", "dwaa", "dwab"; the lossy ones change the values).
+struct ExrSettings {
+  bool half = false;
+  std::string compression = "zip";
+};
+
+// OpenEXR, one channel per plane (32-bit float, zip unless `settings` say
+// otherwise). OpenEXR stores the
 // channels sorted by name, so readers see them in that (or their own)
 // order, not the given one. Planes must share one size and have distinct,
 // non-empty names; NaN is rejected (infinity is kept). Both writers throw
 // std::invalid_argument for bad input and OutputError when writing fails,
 // and put no date or software name in the file: equal inputs give equal
 // bytes.
-void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>& planes);
+void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>& planes,
+               const ExrSettings& settings = {});
+// An indexed (palette) 8-bit PNG of the pixel classes (the "id" AOV: 0
+// background, 1 skin, 2 sclera, 3 iris, 4 pupil): each pixel's byte is its
+// class, which numpy and PIL read as is; viewers show the palette's
+// colours. Throws std::invalid_argument for a value that is not a class,
+// OutputError when writing fails; no date in the file.
+void write_class_png(const std::filesystem::path& file, const ImagePlane& classes);
+// Reads a class PNG back: the class indices (for tests and tools).
+ImagePlane read_class_png(const std::filesystem::path& file);
 
 // Reads a PNG written by write_png back (for tests and tools); DN values
 // as written, before any bit shift is undone. Throws OutputError on failure.

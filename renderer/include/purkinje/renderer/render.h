@@ -27,6 +27,7 @@
 #include "purkinje/models/scene.h"
 #include "purkinje/models/truth.h"
 #include "purkinje/renderer/image.h"
+#include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/radiometry.h"
 
 namespace purkinje::renderer {
@@ -111,15 +112,38 @@ RenderResult render(const Scene& scene, int camera, const RenderOptions& options
 void render(const Scene& scene, int camera, const RenderOptions& options, RenderResult& result);
 
 // The files of one rendered image: the sensor image (PNG), float radiance
-// with AOVs (EXR) and the labels (JSON: the `purkinje truth` schema plus a
-// "render" section with file names, sensor settings and glint radiometry).
+// with AOVs (EXR), the pixel classes (indexed PNG) and the labels (JSON:
+// the `purkinje truth` schema plus a "render" section with file names and
+// checks, sensor settings and glint radiometry). A file not chosen has an
+// empty path.
 struct RenderFiles {
-  std::filesystem::path image, exr, labels;
+  std::filesystem::path image, exr, labels, segmentation;
 };
-// Adds <dir>/<stem>.png, .exr and .json to `files` (copying what they
-// need), so that several images can be committed all-or-nothing together.
+
+// Which files an image gets and how: `render` writes the defaults, a data
+// set chooses (models/dataset_spec.h).
+struct ImageFileChoice {
+  bool image = true;                    // <stem>.png
+  bool exr = true;                      // <stem>.exr
+  std::vector<std::string> exr_planes;  // empty: every plane (exr_plane_names)
+  ExrSettings exr_settings;
+  bool segmentation = false;            // <stem>_classes.png
+  bool indent_labels = true;            // false: one line, a third smaller
+  // A JSON object whose members join the labels' top level (a data set's
+  // "dataset" section); empty: none.
+  std::string labels_extra;
+};
+
+// The planes an EXR of `scene` rendered with `options` holds, in order.
+std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions& options);
+
+// Adds <dir>/<stem>.png, .exr, _classes.png and .json (as `choice` says)
+// to `files` (copying what they need), so that several images can be
+// committed all-or-nothing together. Throws std::invalid_argument for an
+// EXR plane the render does not have.
 RenderFiles add_render(FileSet& files, const std::filesystem::path& dir, const std::string& stem,
-                       const Scene& scene, const RenderResult& result, const RenderOptions& options);
+                       const Scene& scene, const RenderResult& result, const RenderOptions& options,
+                       const ImageFileChoice& choice = {});
 // Writes <dir>/<stem>.png, .exr and .json all-or-nothing (FileSet);
 // throws OutputError naming the file and the reason.
 RenderFiles write_render(const std::filesystem::path& dir, const std::string& stem, const Scene& scene,

@@ -14,14 +14,10 @@
 #include "cli.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/spelling.h"
+#include "purkinje/models/version.h"
 #include "purkinje/renderer/ray_tracer.h"
 
 namespace {
-
-// The project's version, as in the top-level CMakeLists.txt.
-#ifndef PURKINJE_VERSION
-#define PURKINJE_VERSION "0.1.0"
-#endif
 
 using namespace purkinje::tools;
 
@@ -35,7 +31,7 @@ std::string version_text() {
   } catch (const std::exception& error) {
     embree = error.what();
   }
-  return std::string("purkinje ") + PURKINJE_VERSION + "\nembree: " + embree;
+  return std::string("purkinje ") + purkinje::version() + "\nembree: " + embree;
 }
 
 // A mistyped subcommand would only get CLI11's "A subcommand is required".

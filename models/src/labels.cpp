@@ -3,13 +3,14 @@
 
 #include "purkinje/models/labels.h"
 
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
+
+#include "purkinje/models/csv.h"
 
 namespace purkinje {
 namespace {
@@ -267,16 +268,6 @@ std::string csv_number(double v) {
   return std::string(buffer, result.ptr);
 }
 
-// RFC 4180 quoting, only where a field needs it.
-std::string csv_text(const std::string& s) {
-  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char ch : s) {
-    if (ch == '"') out += '"';
-    out += ch;
-  }
-  return out + "\"";
-}
 
 struct CsvRow {
   std::string cells[kCsvColumnCount];
@@ -359,7 +350,7 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
     auto row = [&](const char* feature) {
       CsvRow r;
       r.set("camera", std::to_string(v.camera));
-      r.set("camera_name", csv_text(camera.name()));
+      r.set("camera_name", csv_cell(camera.name()));
       r.set("eye", std::to_string(v.eye));
       r.set("feature", feature);
       return r;
@@ -368,7 +359,7 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
     for (const GlintTruth& g : v.glints) {
       CsvRow r = row("glint");
       r.set("index", std::to_string(g.illuminator));
-      r.set("name", csv_text(scene.illuminators.at(g.illuminator).name));
+      r.set("name", csv_cell(scene.illuminators.at(g.illuminator).name));
       r.set("status", to_string(g.status));
       const Reflection& path = g.reflection;
       if (path_valid(path.status)) {

@@ -1,5 +1,7 @@
 #include "purkinje/studies/simulation.h"
 
+#include "purkinje/models/csv.h"
+
 #include <cmath>
 #include <exception>
 #include <nlohmann/json.hpp>
@@ -90,14 +92,6 @@ std::string text_of(const Results::Value& value) {
   return out.str();
 }
 
-// A CSV cell: quoted, quotes doubled, when it holds a comma, a quote or a
-// line break (RFC 4180).
-std::string csv_cell(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
 
 }  // namespace
 

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "csv.h"
+#include "purkinje/models/csv.h"
 #include "purkinje/models/input_file.h"
 
 namespace purkinje::trackers {

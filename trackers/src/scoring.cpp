@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "csv.h"
+#include "purkinje/models/csv.h"
 
 namespace purkinje::trackers {
 

@@ -1,10 +1,10 @@
 #pragma once
-// CSV cells as RFC 4180 writes them (internal to trackers/): the scores'
-// rows and the detections files.
+// CSV cells as RFC 4180 writes them: the labels, scores, detections,
+// simulation results and data-set tables share this one rule.
 
 #include <string>
 
-namespace purkinje::trackers {
+namespace purkinje {
 
 // The text as one cell: quoted, with its quotes doubled, when it holds a
 // comma, a quote or a line break.
@@ -15,4 +15,4 @@ inline std::string csv_cell(const std::string& text) {
   return quoted + "\"";
 }
 
-}  // namespace purkinje::trackers
+}  // namespace purkinje

@@ -140,7 +140,8 @@ RenderFiles add_render(FileSet& set, const std::filesystem::path& dir, const std
   files.labels = dir / (stem + ".json");
   auto labels = std::make_shared<json>(labels_document(scene, result, options, files));
   if (!choice.labels_extra.empty()) {
-    for (const auto& [key, value] : json::parse(choice.labels_extra).items()) (*labels)[key] = value;
+    const json extra = json::parse(choice.labels_extra);  // named: items() does not keep a temporary alive
+    for (const auto& [key, value] : extra.items()) (*labels)[key] = value;
   }
   if (choice.image) {
     auto sensor = std::make_shared<SensorImage>(result.sensor);

@@ -126,6 +126,22 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   out["visual_axis"] = vector(t.visual_axis);
   out["kappa_deg"] = {{"horizontal", degrees(m.kappa_horizontal_rad)},
                       {"vertical", degrees(m.kappa_vertical_rad)}};
+  out["posterior_cornea"] = m.posterior_cornea.has_value();
+  out["aqueous_index"] = number(m.aqueous_index);
+  out["rotation_center_depth_mm"] = number(m.rotation_center_depth_mm);
+  // How the eye looks: what a data set varies besides its geometry.
+  const EyeAppearance& a = eye.appearance();
+  json look = json::object();
+  look["iris_albedo"] = number(a.iris_albedo);
+  look["iris_texture_contrast"] = number(a.iris_texture_contrast);
+  look["iris_seed"] = a.iris_seed;
+  look["sclera_albedo"] = number(a.sclera_albedo);
+  look["skin_albedo"] = number(a.skin_albedo);
+  look["fundus_reflectance"] = number(a.fundus_reflectance);
+  look["head_forward"] = vector(a.head_forward);
+  look["head_up"] = vector(a.head_up);
+  look["lid_opening"] = a.eyelids ? number(a.eyelids->opening) : json(nullptr);
+  out["appearance"] = look;
   return out;
 }
 
@@ -158,9 +174,8 @@ void refraction_fields(json& out, const Refraction& r) {
   out["on_cap"] = has_path ? json(r.on_cap) : null;
 }
 
-json ellipse_json(const PupilTruth& p) {
-  if (!p.ellipse_valid) return nullptr;
-  const Ellipse& e = p.ellipse;
+json ellipse_json(bool valid, const Ellipse& e) {
+  if (!valid) return nullptr;
   json out = json::object();
   out["center_u_px"] = number(e.center.u);
   out["center_v_px"] = number(e.center.v);
@@ -188,7 +203,8 @@ json pupil_json(const PupilTruth& p, const Camera& camera) {
     border.push_back(point_out);
   }
   out["border"] = border;
-  out["ellipse"] = ellipse_json(p);
+  out["ellipse"] = ellipse_json(p.ellipse_valid, p.ellipse);
+  out["visible_ellipse"] = ellipse_json(p.visible_ellipse_valid, p.visible_ellipse);
   json centre = json::object();
   centre["status"] = to_string(p.refracted_center_status);
   pixel_fields(centre,

@@ -15,6 +15,8 @@ packages=(
   # that name functions and lines.
   clang libclang-rt-14-dev llvm
   gcovr python3
+  # The Slurm test (tests/slurm) starts a single-node cluster of its own.
+  slurmctld slurmd slurm-client munge
 )
 
 if ! command -v dpkg-query >/dev/null 2>&1; then

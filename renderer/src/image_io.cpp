@@ -11,6 +11,7 @@
 #include "purkinje/renderer/image_io.h"
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/half.h>
 #include <OpenImageIO/imageio.h>
 
 #include <atomic>
@@ -180,12 +181,28 @@ void write_exr(const std::filesystem::path& file, const std::vector<NamedPlane>&
   const char* no_date = nullptr;
   spec.attribute("DateTime", OIIO::TypeString, &no_date);
 
-  std::vector<float> interleaved(pixels * channels);
-  for (std::size_t c = 0; c < channels; ++c) {
-    const std::vector<float>& values = planes[c].plane.values;
-    for (std::size_t i = 0; i < pixels; ++i) interleaved[i * channels + c] = values[i];
+  std::vector<unsigned char> bytes;
+  if (settings.half) {
+    // Converted here: OIIO's own float-to-half conversion cost 40 ms for a
+    // remote image's 13 planes, more than the fastest codecs' encoding.
+    std::vector<half> interleaved(pixels * channels);
+    std::vector<const float*> sources;
+    for (const NamedPlane& p : planes) sources.push_back(p.plane.values.data());
+    // Pixel by pixel: the output is written in order (plane by plane, it
+    // was written with a stride of `channels`, a tenth of the encoding).
+    half* out = interleaved.data();
+    for (std::size_t i = 0; i < pixels; ++i) {
+      for (std::size_t c = 0; c < channels; ++c) *out++ = half(sources[c][i]);
+    }
+    bytes = encode("openexr", file, spec, OIIO::TypeDesc::HALF, interleaved.data());
+  } else {
+    std::vector<float> interleaved(pixels * channels);
+    for (std::size_t c = 0; c < channels; ++c) {
+      const std::vector<float>& values = planes[c].plane.values;
+      for (std::size_t i = 0; i < pixels; ++i) interleaved[i * channels + c] = values[i];
+    }
+    bytes = encode("openexr", file, spec, OIIO::TypeDesc::FLOAT, interleaved.data());
   }
-  const std::vector<unsigned char> bytes = encode("openexr", file, spec, OIIO::TypeDesc::FLOAT, interleaved.data());
   write_bytes(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 

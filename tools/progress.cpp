@@ -37,6 +37,9 @@ void Progress::step() {
   if (quiet_) return;
   const auto now = std::chrono::steady_clock::now();
   if (terminal_ && done_ < total_ && now - last_shown_ < std::chrono::milliseconds(100)) return;
+  // A log gets a line per step, or per percent beyond 100 steps: a
+  // million-image shard must not write a million lines.
+  if (!terminal_ && total_ > 100 && done_ < total_ && done_ * 100 / total_ == (done_ - 1) * 100 / total_) return;
   last_shown_ = now;
   show(!terminal_);
 }

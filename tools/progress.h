@@ -1,7 +1,8 @@
 #pragma once
 // Overall progress of a long command on stderr: "label: k/N, R per s, ETA
 // m:ss". On a terminal one line, redrawn at most ten times a second and
-// cleared at the end; otherwise (a log, CI) one line per step. Quiet: nothing.
+// cleared at the end; otherwise (a log, CI) one line per step, or per
+// percent beyond 100 steps. Quiet: nothing.
 
 #include <chrono>
 #include <cstddef>

@@ -82,6 +82,13 @@ class Misuse : public ::testing::TestWithParam<Case> {
     std::ofstream(w / "bad_labels/x.json") << R"({"labels_format": 1e400})";
     std::ofstream(w / "detections.csv") << "image,feature,u_px,v_px\nremote_v0000_cam0.png,pupil,300,200\n";
     fs::copy_file(w / "detections.csv", w / "score.csv");
+    // Dataset specs over the scene: a good one, one named as an image the
+    // set would write, one with an unknown parameter, one no eye can have.
+    const std::string spec = R"({"dataset_format": 1, "name": "t", "scene": "scene.json", "count": 2)";
+    std::ofstream(w / "spec.json") << spec << "}";
+    std::ofstream(w / "t_000000_cam0.json") << spec << "}";
+    std::ofstream(w / "bad_spec.json") << spec << R"(, "parameters": {"pupil_size": 2}})";
+    std::ofstream(w / "no_eye_spec.json") << spec << R"(, "parameters": {"pupil_radius_mm": {"uniform": [5.95, 6]}}})";
   }
   static void TearDownTestSuite() {
     fs::remove_all(*workspace_);
@@ -186,7 +193,19 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"PupilPointsNegative", "truth {W}/scene.json --pupil-points -1", 2, "--pupil-points"},
         Case{"OverlaysNegative", "track {W}/set -o {W}/out --overlays -1", 2, "--overlays"},
         Case{"SamplesZero", "render {W}/scene.json -o {W}/out --samples 0", 2, "--samples"},
-        Case{"RenderWithoutAnOutput", "render {W}/scene.json", 2, "--output is required"}),
+        Case{"RenderWithoutAnOutput", "render {W}/scene.json", 2, "--output is required"},
+        Case{"GenerateIntoAFile", "generate {W}/spec.json -o {W}/file.txt", 3, "exists and is not a folder"},
+        Case{"GenerateOverItsSpec", "generate {W}/t_000000_cam0.json -o {W}", 2, "is an input of this command"},
+        Case{"GenerateFromAFifo", "generate {W}/fifo -o {W}/out", 1, "cannot read: is a FIFO (named pipe)"},
+        Case{"GenerateAnUnknownParameter", "generate {W}/bad_spec.json -o {W}/out", 1,
+             "bad_spec.json: parameters.pupil_size = 2: unknown key"},
+        Case{"GenerateAnEyeNoneCanHave", "generate {W}/no_eye_spec.json -o {W}/out", 1, "t: image 0: "},
+        Case{"GenerateShardBeyondItsCount", "generate {W}/spec.json -o {W}/out --shard 4/4", 2,
+             "--shard 4/4: must be I/N with 0 <= I < N"},
+        Case{"GenerateShardNotNumbers", "generate {W}/spec.json -o {W}/out --shard one/4", 2, "--shard one/4: must be"},
+        Case{"GenerateCountZero", "generate {W}/spec.json -o {W}/out --count 0", 2, "--count"},
+        Case{"MergeWithoutShards", "merge {W}/empty", 1, "no shard manifests (manifest.shard-I-of-N.json)"},
+        Case{"MergeAFile", "merge {W}/file.txt", 1, "file.txt: cannot list"}),
     [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.name); });
 
 }  // namespace

@@ -222,8 +222,7 @@ json dataset_section(const GeneratePlan& plan, const ImageDraw& draw) {
   }
   json section = json::object();
   section["name"] = plan.spec.name;
-  section["index"] = draw.index;
-  section["count"] = plan.count;
+  section["index"] = draw.index;  // not the set's count: image k is the same in a trial of 100 and the set
   section["seed"] = draw.seed;
   section["spec_sha1"] = plan.spec_sha1;
   section["purkinje_version"] = version();

@@ -326,6 +326,24 @@ TEST(Generate, ShardsTogetherAreTheWholeSetByteForByte) {
   fs::remove_all(dir);
 }
 
+TEST(Generate, ATrialIsTheSetsFirstImages) {
+  const fs::path dir = fresh_dir("trial");
+  const fs::path spec = write_spec(dir, "remote", R"("parameters": {"pupil_radius_mm": {"uniform": [1, 3]}})", 3);
+  run(spec, dir / "set");
+  GenerateRequest trial;
+  trial.spec_file = spec;
+  trial.output_dir = dir / "trial";
+  trial.count = 2;  // --count 2
+  generate(plan_generate(trial));
+  const auto set = folder_bytes(dir / "set");
+  for (const auto& [name, bytes] : folder_bytes(dir / "trial")) {
+    if (name == "table.csv" || name == "manifest.json") continue;
+    EXPECT_TRUE(set.at(name) == bytes) << name;
+  }
+  EXPECT_FALSE(fs::exists(dir / "trial" / "t_000002_cam0.png"));
+  fs::remove_all(dir);
+}
+
 TEST(Generate, AKilledRunResumesToTheSameBytes) {
   const fs::path dir = fresh_dir("resume");
   const fs::path spec = write_spec(dir, "remote", R"("parameters": {"pupil_radius_mm": {"uniform": [1, 3]}})", 3);

@@ -25,6 +25,7 @@
 #include "purkinje/models/output_file.h"
 #include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/render.h"
+#include "purkinje/renderer/sensor_model.h"
 #include "purkinje/studies/generate.h"
 
 namespace purkinje::studies {
@@ -146,8 +147,9 @@ void generate_against_render(benchmark::State& state, const std::string& scene) 
 }
 
 // Where one image's time goes, one thread: render (tracing, glints,
-// optics and sensor), then each file encoded and written (fsync and
-// rename included) on its own, then the labels read back for the table.
+// optics and sensor; the sensor's noise and quantization timed again on
+// their own), then each file encoded and written (fsync and rename
+// included) on its own.
 void stages(benchmark::State& state, const std::string& scene) {
   using clock = std::chrono::steady_clock;
   const fs::path dir = bench_dir("stages");
@@ -159,7 +161,7 @@ void stages(benchmark::State& state, const std::string& scene) {
   renderer::RenderOptions options = plan.options;
   options.seed = draw_image(plan.spec, 0).seed;
   renderer::RenderResult result;
-  double render_s = 0, png_s = 0, classes_s = 0, exr_s = 0, labels_s = 0;
+  double render_s = 0, sensor_s = 0, png_s = 0, classes_s = 0, exr_s = 0, labels_s = 0;
   const auto write_only = [&](bool image, bool classes, bool exr, double& seconds) {
     renderer::ImageFileChoice choice = plan.files;
     choice.image = image;
@@ -176,6 +178,10 @@ void stages(benchmark::State& state, const std::string& scene) {
     const auto t0 = clock::now();
     renderer::render(plan.spec.scene, 0, options, result);
     render_s += std::chrono::duration<double>(clock::now() - t0).count();
+    // The sensor's share of the render: exposing its electrons again.
+    const auto t1 = clock::now();
+    benchmark::DoNotOptimize(renderer::expose(result.electrons, plan.spec.scene.cameras[0].sensor(), options.seed));
+    sensor_s += std::chrono::duration<double>(clock::now() - t1).count();
     write_only(false, false, false, labels_only);  // the labels alone
     write_only(true, false, false, png_s);
     write_only(false, true, false, classes_s);
@@ -184,6 +190,7 @@ void stages(benchmark::State& state, const std::string& scene) {
   labels_s = labels_only;
   const double n = static_cast<double>(state.iterations());
   state.counters["render_ms"] = 1e3 * render_s / n;
+  state.counters["sensor_ms"] = 1e3 * sensor_s / n;  // a part of render_ms
   state.counters["labels_ms"] = 1e3 * labels_s / n;
   // Each file's own cost: its write with the labels, less the labels alone.
   state.counters["png_ms"] = 1e3 * (png_s - labels_s) / n;

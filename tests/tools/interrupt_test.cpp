@@ -1,6 +1,6 @@
-// A labelled set's render killed at many points (SIGKILL, which nothing
-// can catch, and SIGTERM, which purkinje handles), then continued with
-// --resume: the folder ends byte for byte as one uninterrupted run leaves
+// A labelled set's render, and a data set's generate, killed at many
+// points (SIGKILL, which nothing can catch, and SIGTERM, which purkinje
+// handles), then continued with --resume: the folder ends byte for byte as one uninterrupted run leaves
 // it, with no temporary left. The kill points are exact: PURKINJE_STOP_AT
 // makes the process raise the signal at the N-th event of a kind
 // (models/output_file.h, stop_point).
@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -205,6 +206,107 @@ TEST_F(Interrupted, ResumeWithoutAnIndexOrAfterACutLine) {
   std::ofstream(dir / "variations.csv", std::ios::binary | std::ios::trunc) << index.substr(0, index.size() - 5);
   ASSERT_EQ(render_set(dir, "--resume").code, 0);
   EXPECT_TRUE(contents(dir) == *reference_);
+}
+
+// ---------------------------------------------------------------- generate
+
+// `purkinje generate` of a spec over the tiny scene (pupil, gaze and iris
+// varied, every file kind), killed at many points and resumed; a shard
+// killed and resumed, then merged.
+constexpr int kImages = 12;
+
+Status generate(const fs::path& spec, const fs::path& dir, const std::string& extra,
+                const std::string& environment = "") {
+  const std::string command = (environment.empty() ? "" : "env " + environment + " ") + "'" + kExecutable.string() +
+                              "' generate '" + spec.string() + "' -o '" + dir.string() + "' " + extra +
+                              " > /dev/null 2>&1";
+  const int status = std::system(command.c_str());
+  Status s;
+  if (WIFSIGNALED(status)) {
+    s.signal = WTERMSIG(status);
+  } else if (WIFEXITED(status)) {
+    s.exited = true;
+    s.code = WEXITSTATUS(status);
+    if (s.code > 128) s.signal = s.code - 128;
+  }
+  return s;
+}
+
+class GenerateInterrupted : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = new fs::path(fs::temp_directory_path() / ("purkinje_generate_interrupt_" + std::to_string(::getpid())));
+    fs::remove_all(*root_);
+    fs::create_directories(*root_);
+    spec_ = new fs::path(*root_ / "spec.json");
+    std::ofstream(*spec_) << R"({"dataset_format": 1, "name": "tiny", "scene": ")"
+                          << (kSourceDir / "tests/data/tiny_remote.json").string() << R"(", "count": )" << kImages
+                          << R"(, "gaze": {"cone_deg": 20}, "outputs": {"exr": {"planes": ["Y", "depth"]}},
+                                "parameters": {"pupil_radius_mm": {"uniform": [1, 3]}, "iris_seed": {"uniform": [1, 99]}}})";
+    ASSERT_EQ(generate(*spec_, *root_ / "reference", "").code, 0);
+    reference_ = new std::map<std::string, std::string>(contents(*root_ / "reference"));
+    ASSERT_EQ(reference_->size(), 4u * kImages + 2);  // PNG, classes, EXR, labels; table and manifest
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*root_);
+    delete reference_;
+    delete spec_;
+    delete root_;
+  }
+
+  void expect_reference(const fs::path& dir) {
+    const auto found = contents(dir);
+    for (const auto& [name, bytes] : *reference_) {
+      const auto it = found.find(name);
+      ASSERT_NE(it, found.end()) << name << " missing";
+      EXPECT_TRUE(it->second == bytes) << name << " differs from the uninterrupted run's";
+    }
+    for (const auto& [name, bytes] : found) {
+      EXPECT_TRUE(reference_->count(name) || name.find(".shard-") != std::string::npos) << name << " left over";
+    }
+  }
+
+  static fs::path* root_;
+  static fs::path* spec_;
+  static std::map<std::string, std::string>* reference_;
+};
+
+fs::path* GenerateInterrupted::root_ = nullptr;
+fs::path* GenerateInterrupted::spec_ = nullptr;
+std::map<std::string, std::string>* GenerateInterrupted::reference_ = nullptr;
+
+// Renames: 4 per image (PNG, classes, EXR, labels last), then the table
+// and the manifest: rename 2 is between the first image's PNG and
+// classes, 4 before its labels, 49 the table with the manifest not yet.
+TEST_F(GenerateInterrupted, KilledAnywhereThenResumedGivesTheBytesOfOneRun) {
+  const char* const stops[] = {"renamed:2", "renamed:4", "temporary_written:11", "unit_written:7", "renamed:49"};
+  int runs = 0;
+  for (int i = 0; i < std::min(kill_points(), 5); ++i) {
+    const char* stop = stops[i];
+    for (const char* signal : {"KILL", "TERM"}) {
+      const std::string where = std::string(stop) + ":" + signal;
+      SCOPED_TRACE(where);
+      const fs::path dir = *root_ / ("killed" + std::to_string(++runs));
+      const Status killed = generate(*spec_, dir, "", "PURKINJE_STOP_AT=" + where);
+      EXPECT_EQ(killed.signal, std::string(signal) == "KILL" ? SIGKILL : SIGTERM) << "exit " << killed.code;
+      EXPECT_FALSE(fs::exists(dir / "manifest.json"));
+      ASSERT_EQ(generate(*spec_, dir, "--resume").code, 0);
+      expect_reference(dir);
+    }
+  }
+}
+
+TEST_F(GenerateInterrupted, AKilledShardResumesAndTheShardsMergeIntoTheWholeSet) {
+  const fs::path dir = *root_ / "shards";
+  ASSERT_EQ(generate(*spec_, dir, "--shard 0/3").code, 0);
+  EXPECT_EQ(generate(*spec_, dir, "--shard 1/3", "PURKINJE_STOP_AT=unit_written:2:KILL").signal, SIGKILL);
+  ASSERT_EQ(generate(*spec_, dir, "--shard 2/3").code, 0);
+  const std::string merge = "'" + kExecutable.string() + "' merge '" + dir.string() + "' > /dev/null 2>&1";
+  EXPECT_NE(std::system(merge.c_str()), 0);  // shard 1 has not finished
+  EXPECT_FALSE(fs::exists(dir / "table.csv"));
+  ASSERT_EQ(generate(*spec_, dir, "--shard 1/3 --resume").code, 0);
+  ASSERT_EQ(std::system(merge.c_str()), 0);
+  expect_reference(dir);
 }
 
 }  // namespace

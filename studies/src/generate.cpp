@@ -353,6 +353,17 @@ GeneratePlan plan_generate(const GenerateRequest& request) {
   for (int i = 0; i < static_cast<int>(plan.spec.scene.cameras.size()); ++i) {
     if (plan.spec.camera.empty() || plan.spec.scene.cameras[i].name() == plan.spec.camera) plan.cameras.push_back(i);
   }
+  for (std::size_t a = 0; a < plan.cameras.size(); ++a) {
+    for (std::size_t b = 0; b < a; ++b) {
+      if (image_stem(plan, 0, plan.cameras[a]) == image_stem(plan, 0, plan.cameras[b])) {
+        throw DatasetSpecError(request.spec_file.string() + ": cameras '" +
+                               plan.spec.scene.cameras[plan.cameras[a]].name() + "' and '" +
+                               plan.spec.scene.cameras[plan.cameras[b]].name() +
+                               "' would write the same files: give them names that differ in letters, digits, "
+                               "'-', '_' or '.'");
+      }
+    }
+  }
   r::embree_device();  // a bad PURKINJE_EMBREE_CONFIG is named now, not after the first render
 
   plan.options.samples_per_pixel = plan.spec.samples_per_pixel;

@@ -404,7 +404,7 @@ TEST(Generate, MergeRefusesWhatIsNotTheShardsOfOneSet) {
   fs::remove_all(dir);
 }
 
-TEST(Generate, PlanRefusesABadShardAndAnUnknownExrPlane) {
+TEST(Generate, PlanRefusesABadShardAnUnknownExrPlaneAndCamerasNamedAlike) {
   const fs::path dir = fresh_dir("plan");
   GenerateRequest request;
   request.spec_file = write_spec(dir, "remote", R"("outputs": {"exr": {"planes": ["Y", "albedo"]}})", 2);
@@ -415,6 +415,22 @@ TEST(Generate, PlanRefusesABadShardAndAnUnknownExrPlane) {
   } catch (const DatasetSpecError& e) {
     EXPECT_NE(std::string(e.what()).find("outputs.exr.planes = \"albedo\": the render has no such plane (valid: Y, electrons"),
               std::string::npos)
+        << e.what();
+  }
+  // Two cameras whose names make the same file names.
+  std::ofstream(dir / "two_cameras.json") << R"({"format": 1, "cameras": [
+      {"name": "a b", "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+       "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600]},
+      {"name": "a_b", "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+       "position_mm": [10, 0, 0], "look_at_mm": [0, 0, 600]}],
+      "eyes": [{"position": {"cornea_center_mm": [0, 0, 600]}, "orientation": {}}]})";
+  std::ofstream(dir / "two_cameras_spec.json") << R"({"dataset_format": 1, "scene": "two_cameras.json", "count": 1})";
+  request.spec_file = dir / "two_cameras_spec.json";
+  try {
+    plan_generate(request);
+    FAIL() << "planned";
+  } catch (const DatasetSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find("cameras 'a_b' and 'a b' would write the same files"), std::string::npos)
         << e.what();
   }
   request.spec_file = write_spec(dir, "remote", "", 2);

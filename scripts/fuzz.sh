@@ -6,7 +6,7 @@
 # targets fuzzed beside it end) with a non-zero exit, its input saved in
 # build/fuzz/findings/.
 #
-#   bash scripts/fuzz.sh [SECONDS [TARGET...]]   (60 s; scene obj labels detections)
+#   bash scripts/fuzz.sh [SECONDS [TARGET...]]   (60 s; scene obj labels detections dataset_spec)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"  # cache hits across checkouts
@@ -14,7 +14,7 @@ export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"  # cache hits across checkouts
 seconds="${1:-60}"
 [ $# -gt 0 ] && shift
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(scene obj labels detections)
+[ ${#targets[@]} -eq 0 ] && targets=(scene obj labels detections dataset_spec)
 build=build/fuzz
 
 bash scripts/install-deps.sh  # clang and its libFuzzer runtime among them

@@ -175,6 +175,8 @@ Distribution read_distribution(const Value& v, const ParameterRule& rule) {
       double total = 0;
       for (double x : d.weights) total += x;
       if (!(total > 0)) w->fail("must not all be 0");
+      // An infinite sum would draw the last choice whatever its weight.
+      if (!std::isfinite(total)) w->fail("must have a finite sum");
     }
   } else if (auto g = o.optional("grid")) {
     d.kind = Distribution::Kind::grid;
@@ -187,7 +189,10 @@ Distribution read_distribution(const Value& v, const ParameterRule& rule) {
       const int steps = range.required("steps").as_int();
       if (steps < 1 || steps > 1000000) range.where().child("steps").fail(std::to_string(steps), "must be in [1, 1000000]");
       for (int i = 0; i < steps; ++i) {
-        double x = steps == 1 ? from : from + (to - from) * i / (steps - 1);
+        // lerp: exact at both ends and monotone (from + (to - from) * i / n
+        // overshot `to` in the last bit, past a parameter's range).
+        double x = steps == 1 ? from : std::lerp(from, to, static_cast<double>(i) / (steps - 1));
+        x = std::clamp(x, std::min(from, to), std::max(from, to));
         if (rule.type == ParameterType::integer) x = std::round(x);
         d.values.push_back(x);
       }
@@ -407,6 +412,21 @@ struct Reader {
     for (const char* name : {"lid_opening", "blink", "skin_albedo"}) {
       if (given(name) && !lids) where.at(name).fail("", "the scene's first eye has no eyelids (scene-format.md: eyelids)");
     }
+    // A focus no nearer than the lens: the scene file's rule, for every
+    // camera the set renders.
+    if (given("focus_distance_mm")) {
+      const Distribution& d = drawn.at("focus_distance_mm");
+      const double nearest = d.values.empty() ? d.low : *std::min_element(d.values.begin(), d.values.end());
+      for (const Camera& camera : scene.cameras) {
+        if (!spec.camera.empty() && camera.name() != spec.camera) continue;
+        const double focal_length = camera.focal_length_mm();
+        if (!(nearest > focal_length)) {
+          where.at("focus_distance_mm")
+              .fail("", "reaches " + format_number(nearest) + " mm: must stay beyond camera '" + camera.name() +
+                            "''s focal length, " + format_number(focal_length) + " mm");
+        }
+      }
+    }
     for (const ParameterRule& rule : scene_rules()) {
       if (given(rule.name.c_str())) add(spec, rule, drawn.at(rule.name));
     }
@@ -430,6 +450,9 @@ double standard_normal_cdf(double x) { return 0.5 * std::erfc(-x / std::numbers:
 // the interval, worked in the tail nearer zero for precision.
 double truncated_normal(const Distribution& d, double u) {
   double a = (d.low - d.mean) / d.sd, b = (d.high - d.mean) / d.sd;
+  // Truncated to a sliver of a standard deviation the normal is uniform to
+  // first order, and the CDF's two ends round together.
+  if (b - a < 1e-7) return d.low + u * (d.high - d.low);
   const bool upper = a > 0;
   if (upper) {
     std::tie(a, b) = std::pair{-b, -a};
@@ -552,7 +575,11 @@ ImageDraw draw_image(const DatasetSpec& spec, std::uint64_t index) {
   std::uint64_t rest = index;
   std::uint64_t product = 1;
   for (const VariedParameter& p : spec.parameters) {
-    if (p.distribution.kind == Distribution::Kind::grid) product *= p.distribution.values.size();
+    if (p.distribution.kind != Distribution::Kind::grid) continue;
+    // Capped beyond any index (< 2^40): a product that wrapped past 2^64
+    // to 0 divided by zero below.
+    const std::uint64_t size = p.distribution.values.size();
+    product = product > (kMaxCount + 1) / size ? kMaxCount + 1 : product * size;
   }
   rest = index % product;
   for (std::size_t i = spec.parameters.size(); i-- > 0;) {

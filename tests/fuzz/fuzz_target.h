@@ -3,7 +3,7 @@
 // its invariants use. Each target is built twice: alone as a libFuzzer
 // program (PURKINJE_FUZZ, clang), where its entry point must be called
 // LLVMFuzzerTestOneInput, and together with the others into the corpus
-// replay test (every build), where the four need distinct names.
+// replay test (every build), where the five need distinct names.
 
 #include <cstddef>
 #include <cstdint>

@@ -20,6 +20,7 @@ extern "C" int purkinje_fuzz_scene(const std::uint8_t* data, std::size_t size);
 extern "C" int purkinje_fuzz_obj(const std::uint8_t* data, std::size_t size);
 extern "C" int purkinje_fuzz_labels(const std::uint8_t* data, std::size_t size);
 extern "C" int purkinje_fuzz_detections(const std::uint8_t* data, std::size_t size);
+extern "C" int purkinje_fuzz_dataset_spec(const std::uint8_t* data, std::size_t size);
 
 namespace {
 
@@ -58,5 +59,6 @@ TEST(FuzzCorpus, SceneReader) { replay("scene", purkinje_fuzz_scene); }
 TEST(FuzzCorpus, ObjReader) { replay("obj", purkinje_fuzz_obj); }
 TEST(FuzzCorpus, LabelsReader) { replay("labels", purkinje_fuzz_labels); }
 TEST(FuzzCorpus, DetectionsReader) { replay("detections", purkinje_fuzz_detections); }
+TEST(FuzzCorpus, DatasetSpecReader) { replay("dataset_spec", purkinje_fuzz_dataset_spec); }
 
 }  // namespace

@@ -141,6 +141,36 @@ TEST(DatasetSpec, GridsFormAProductTheLastVaryingFastest) {
   }
 }
 
+// Found by fuzzing (tests/fuzz/corpus/dataset_spec): a grid's last step
+// rounding past its end, a product of grids wrapping past 2^64, a normal
+// truncated to a sliver of its sd.
+TEST(DatasetSpec, GridEndsAreExactAndHugeProductsAndSliversDrawInRange) {
+  const DatasetSpec ends = spec_with(R"("parameters": {"lid_opening": {"grid": {"from": 0.2, "to": 1, "steps": 7}},
+                                                       "iris_albedo": {"grid": {"from": 0.2, "to": 0, "steps": 4}}})");
+  EXPECT_EQ(ends.parameters[0].distribution.values.back(), 1.0);
+  EXPECT_EQ(ends.parameters[1].distribution.values.back(), 0.0);
+  for (const VariedParameter& p : ends.parameters) {
+    for (double v : p.distribution.values) EXPECT_TRUE(v >= 0 && v <= 1) << p.name << " " << v;
+  }
+  const DatasetSpec product = spec_with(R"("parameters": {
+      "iris_albedo": {"grid": {"from": 0, "to": 1, "steps": 65536}},
+      "sclera_albedo": {"grid": {"from": 0, "to": 1, "steps": 65536}},
+      "skin_albedo": {"grid": {"from": 0, "to": 1, "steps": 65536}},
+      "fundus_reflectance": {"grid": {"from": 0, "to": 1, "steps": 65536}}})");
+  // Its size is beyond any index (2^64 wrapped to 0 before): image k takes entry k, the last varying fastest.
+  const ImageDraw d = draw_image(product, 65537);
+  EXPECT_EQ(column(product, d, "skin_albedo"), 1.0 / 65535);  // 65537 = 1 * 65536 + 1
+  EXPECT_EQ(column(product, d, "fundus_reflectance"), 1.0 / 65535);
+  const DatasetSpec sliver = spec_with(R"("parameters": {"iris_albedo": {"normal": {"mean": 0.5, "sd": 1e20, "min": 0, "max": 1}}})");
+  double sum = 0;
+  for (std::uint64_t k = 0; k < 2000; ++k) {
+    const double v = draw_image(sliver, k).values[0];
+    ASSERT_TRUE(v >= 0 && v <= 1);
+    sum += v;
+  }
+  EXPECT_NEAR(sum / 2000, 0.5, 5 * std::sqrt(1 / 12.0 / 2000));  // uniform, not always an end
+}
+
 TEST(DatasetSpec, ScreenTargetsAreFixated) {
   const DatasetSpec spec = spec_with(R"("gaze": {"screen": {"grid": [3, 2]}},
                                         "parameters": {"eye_offset_x_mm": {"uniform": [-40, 40]}})");
@@ -304,6 +334,10 @@ const Malformed kMalformed[] = {
     {R"("parameters": {"illuminators": {"led_left": {"off": true}}})", "parameters.illuminators.led_left.off = true: unknown key (valid keys here: on, power_scale)"},
     {R"("parameters": {"meshes": {"glasses": {"on": false}}})", "parameters.meshes.glasses = {...}: unknown key"},
     {R"("parameters": {"exposure_s": 0})", "parameters.exposure_s = 0: must be in (0, 10] (exposure_s)"},
+    {R"("parameters": {"pupil_radius_mm": {"choice": [1, 2, 3], "weights": [1e308, 1e308, 0]}})",
+     "parameters.pupil_radius_mm.weights = [1e+308, 1e+308, 0]: must have a finite sum"},
+    {R"("parameters": {"focus_distance_mm": {"uniform": [10, 600]}})",
+     "parameters.focus_distance_mm: reaches 10 mm: must stay beyond camera 'cam0''s focal length, 16 mm"},
     {R"("parameters": {"kappa_horizontal_deg": "5"})", "parameters.kappa_horizontal_deg = \"5\": must be a number"},
 };
 

@@ -61,7 +61,7 @@ struct DatasetOutputs {
   bool exr = false;
   std::vector<std::string> exr_planes;  // empty: every plane
   bool exr_half = true;                 // half floats; false: 32-bit
-  std::string exr_compression = "piz";  // an OpenEXR codec name; piz: lossless, fast (docs/benchmarks.md)
+  std::string exr_compression = "rle";  // an OpenEXR codec; rle: lossless, the fastest (docs/benchmarks.md)
 };
 
 struct DatasetSpec {

@@ -226,10 +226,24 @@ struct Reader {
     const Value scene = root.required("scene", "the base scene file, relative to this file");
     spec.scene_file = folder / scene.as_string();
     try {
-      spec.scene = load_scene(spec.scene_file);
+      spec.scene_text = read_input_file(spec.scene_file, kMaxSceneFileBytes, "a scene file");
+      spec.scene = parse_scene(spec.scene_text, spec.scene_file.string(), spec.scene_file.parent_path());
+    } catch (const InputFileError& error) {
+      scene.fail(spec.scene_file.string() + ": cannot read: " + error.reason());
     } catch (const SceneError& error) {
       scene.fail(error.what());
     }
+    spec.source = source;
+    // Names go into file names and one-line CSV records: a line break in
+    // one would split a record.
+    const auto check_name = [&](const std::string& kind, const std::string& name) {
+      if (name.find_first_of("\r\n") != std::string::npos) {
+        scene.fail(kind + " \"" + name + "\" holds a line break: rename it for a data set's table");
+      }
+    };
+    for (const Camera& c : spec.scene.cameras) check_name("camera", c.name());
+    for (const Illuminator& l : spec.scene.illuminators) check_name("illuminator", l.name);
+    for (const Mesh& m : spec.scene.meshes) check_name("mesh", m.name);
     const Value count = root.required("count", "how many images");
     spec.count = count.as_exact_count();
     if (spec.count < 1 || spec.count > kMaxCount) count.fail("must be in [1, 2^40]");
@@ -274,8 +288,12 @@ struct Reader {
         out.exr = true;
         if (auto planes = e.optional("planes")) {
           for (const Value& p : planes->elements()) {
-            out.exr_planes.push_back(p.as_string());
-            if (out.exr_planes.back().empty()) p.fail("must not be empty");
+            const std::string name = p.as_string();
+            if (name.empty()) p.fail("must not be empty");
+            if (std::find(out.exr_planes.begin(), out.exr_planes.end(), name) != out.exr_planes.end()) {
+              p.fail("is listed twice");
+            }
+            out.exr_planes.push_back(name);
           }
           if (out.exr_planes.empty()) planes->fail("must list at least one plane (or leave planes out: all)");
         }
@@ -453,6 +471,14 @@ double truncated_normal(const Distribution& d, double u) {
   // Truncated to a sliver of a standard deviation the normal is uniform to
   // first order, and the CDF's two ends round together.
   if (b - a < 1e-7) return d.low + u * (d.high - d.low);
+  // Beyond 37 sd both ends of the CDF underflow; there the normal's tail is
+  // an exponential of rate a (Mills' ratio, to 1/a^2 < 0.1%).
+  if (a > 37 || b < -37) {
+    const bool lower = b < -37;
+    const double near = lower ? -b : a, far = lower ? -a : b;
+    const double z = near - std::log1p(-u * -std::expm1(-near * (far - near))) / near;
+    return std::clamp(d.mean + d.sd * (lower ? -z : z), d.low, d.high);
+  }
   const bool upper = a > 0;
   if (upper) {
     std::tie(a, b) = std::pair{-b, -a};
@@ -609,7 +635,8 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
     for (std::size_t i = 0; i < spec.parameters.size(); ++i) {
       values += (i ? ", " : "") + spec.parameters[i].name + " = " + format_number(image.values[i]);
     }
-    throw DatasetSpecError(spec.name + ": image " + std::to_string(image.index) + ": " + what + " (drawn: " + values + ")");
+    throw DatasetSpecError((spec.source.empty() ? spec.name : spec.source) + ": image " + std::to_string(image.index) +
+                           ": " + what + " (drawn: " + values + ")");
   };
 
   Scene scene = spec.scene;
@@ -691,6 +718,20 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
     }
   }
   scene.eyes.front().set_appearance(look);
+  // A moved eye must not swallow a camera or a light: the scene reader's
+  // rule, here by the sphere around the centre of rotation that holds the
+  // sclera and the corneal apex.
+  {
+    const Eye& eye = scene.eyes.front();
+    const double radius = std::max(eye.model().sclera_radius_mm, distance(eye.rotation_center(), eye.corneal_apex()));
+    const auto outside = [&](const Point3& p, const std::string& what) {
+      if (!(distance(p, eye.rotation_center()) > radius)) {
+        fail(what + " lies within " + format_number(radius) + " mm of the eye's centre of rotation: inside the eye");
+      }
+    };
+    for (const Camera& c : scene.cameras) outside(c.center(), "camera '" + c.name() + "'");
+    for (const Illuminator& l : spec.scene.illuminators) outside(l.position, "illuminator '" + l.name + "'");
+  }
 
   // Illuminators: scaled, and those off left out of the scene (their
   // glints do not exist; the table marks them off).

@@ -98,6 +98,20 @@ void release_temporary(const std::filesystem::path& temporary) {
   }
 }
 
+void remove_stale_temporaries(const std::filesystem::path& dir,
+                              const std::function<bool(const std::string& target)>& own) {
+  std::error_code ec;  // an unreachable folder is the writes' to report
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const std::optional<long> pid = temporary_owner(name);
+    if (!pid || *pid <= 0) continue;
+    if (own && !own(name.substr(1, name.rfind(".tmp.") - 1))) continue;
+    const bool gone = *pid == static_cast<long>(::getpid()) ||
+                      (::kill(static_cast<pid_t>(*pid), 0) != 0 && errno == ESRCH);
+    if (gone) std::filesystem::remove(e.path(), ec);
+  }
+}
+
 std::optional<long> temporary_owner(std::string_view name) {
   // ".NAME.tmp.PID.N": a hidden name, then ".tmp.", digits, '.', digits.
   if (name.size() < 2 || name.front() != '.') return std::nullopt;

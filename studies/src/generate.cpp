@@ -45,15 +45,16 @@ std::string portable(std::string text) {
   return text;
 }
 
-std::string padded(std::uint64_t k, std::uint64_t count) {
-  const std::size_t digits = std::max<std::size_t>(6, std::to_string(count - 1).size());
+// At least 6 digits, whatever the set's count: image k's names (and its
+// labels, which name its files) are the same in a trial and the set.
+std::string padded(std::uint64_t k) {
   std::string index = std::to_string(k);
-  index.insert(0, digits - index.size(), '0');
+  if (index.size() < 6) index.insert(0, 6 - index.size(), '0');
   return index;
 }
 
 std::string image_stem(const GeneratePlan& plan, std::uint64_t k, int camera) {
-  return portable(plan.spec.name + "_" + padded(k, plan.count) + "_" + plan.spec.scene.cameras[camera].name());
+  return portable(plan.spec.name + "_" + padded(k) + "_" + plan.spec.scene.cameras[camera].name());
 }
 
 std::string number_text(const nlohmann::json& v) {
@@ -74,6 +75,10 @@ json value_json(const VariedParameter& p, double v) {
 std::string sha1_of_file(const fs::path& file) {
   OIIO::SHA1 sha1;
   std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    const std::string why = unreadable_input(file, std::uintmax_t{1} << 50, "a table");
+    throw std::runtime_error(file.string() + ": cannot read: " + (why.empty() ? "cannot open it" : why));
+  }
   std::vector<char> buffer(1 << 16);
   while (in) {
     in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
@@ -88,7 +93,7 @@ std::string spec_sha1(const DatasetSpec& spec) {
   OIIO::SHA1 sha1;
   sha1.append(spec.text);
   sha1.append(std::string_view("\0", 1));
-  sha1.append(read_input_file(spec.scene_file, kMaxSceneFileBytes, "a scene file"));
+  sha1.append(spec.scene_text);
   for (const Mesh& m : spec.scene.meshes) {
     sha1.append(m.name);
     sha1.append(m.vertices.data(), m.vertices.size() * sizeof(Point3));
@@ -264,20 +269,6 @@ std::optional<nlohmann::json> complete_labels(const GeneratePlan& plan, const fs
   }
 }
 
-// A hidden temporary this shard's writes left, its process gone: only
-// those of this shard's own files (another shard on another machine may
-// be writing beside them, with a process id that means nothing here).
-void remove_stale_temporaries(const fs::path& dir, const std::set<std::string>& own) {
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    const std::optional<long> pid = temporary_owner(name);
-    if (!pid || *pid <= 0) continue;
-    const std::string target = name.substr(1, name.rfind(".tmp.") - 1);
-    if (own.count(target) && ::kill(static_cast<pid_t>(*pid), 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
-  }
-}
-
 // What a manifest says of its table: the same for a shard, the whole set
 // and the merge of its shards but for `shard`.
 struct Manifest {
@@ -343,7 +334,9 @@ GeneratePlan plan_generate(const GenerateRequest& request) {
   plan.request = request;
   plan.spec = load_dataset_spec(request.spec_file);
   plan.count = request.count.value_or(plan.spec.count);
-  if (plan.count < 1) throw std::invalid_argument("--count " + std::to_string(plan.count) + ": must be >= 1");
+  if (plan.count < 1 || plan.count > (std::uint64_t{1} << 40)) {
+    throw std::invalid_argument("--count " + std::to_string(plan.count) + ": must be in [1, 2^40]");
+  }
   const Shard& shard = request.shard;
   if (shard.count < 1 || shard.index >= shard.count) {
     throw std::invalid_argument("--shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) +
@@ -352,17 +345,6 @@ GeneratePlan plan_generate(const GenerateRequest& request) {
   for (std::uint64_t k = shard.index; k < plan.count; k += shard.count) plan.images.push_back(k);
   for (int i = 0; i < static_cast<int>(plan.spec.scene.cameras.size()); ++i) {
     if (plan.spec.camera.empty() || plan.spec.scene.cameras[i].name() == plan.spec.camera) plan.cameras.push_back(i);
-  }
-  for (std::size_t a = 0; a < plan.cameras.size(); ++a) {
-    for (std::size_t b = 0; b < a; ++b) {
-      if (image_stem(plan, 0, plan.cameras[a]) == image_stem(plan, 0, plan.cameras[b])) {
-        throw DatasetSpecError(request.spec_file.string() + ": cameras '" +
-                               plan.spec.scene.cameras[plan.cameras[a]].name() + "' and '" +
-                               plan.spec.scene.cameras[plan.cameras[b]].name() +
-                               "' would write the same files: give them names that differ in letters, digits, "
-                               "'-', '_' or '.'");
-      }
-    }
   }
   r::embree_device();  // a bad PURKINJE_EMBREE_CONFIG is named now, not after the first render
 
@@ -388,6 +370,18 @@ GeneratePlan plan_generate(const GenerateRequest& request) {
                              "\": the render has no such plane (valid: " + valid + ")");
     }
   }
+  // A light's glint plane cannot be written for an image without that
+  // light.
+  for (const std::string& plane : outputs.exr_planes) {
+    if (plane.rfind("glint.", 0) != 0) continue;
+    for (const VariedParameter& p : plan.spec.parameters) {
+      if (p.name == "illuminator." + plane.substr(6) + ".on") {
+        throw DatasetSpecError(request.spec_file.string() + ": outputs.exr.planes = \"" + plane +
+                               "\": its illuminator is switched off in some images (parameters.illuminators." +
+                               plane.substr(6) + ".on): leave the plane out, or keep the light on");
+      }
+    }
+  }
   // Every image's draws make an eye before anything is written: a set
   // must not stop on image 90,000 for a pupil beyond its iris. The meshes
   // play no part in that, and copying them for each image would cost more
@@ -398,6 +392,18 @@ GeneratePlan plan_generate(const GenerateRequest& request) {
   plan.spec_sha1 = spec_sha1(plan.spec);
   plan.table_file = table_file_name(shard);
   plan.manifest_file = manifest_file_name(shard);
+  // One image's files, every camera's, differ by name ("cam0" and
+  // "cam0_classes" would share cam0_classes.png).
+  std::vector<std::string> first;
+  for (int camera : plan.cameras) {
+    const std::string stem = image_stem(plan, 0, camera);
+    for (const char* suffix : {".png", "_classes.png", ".exr", ".json"}) first.push_back(stem + suffix);
+  }
+  std::sort(first.begin(), first.end());
+  if (const auto same = std::adjacent_find(first.begin(), first.end()); same != first.end()) {
+    throw DatasetSpecError(request.spec_file.string() + ": two cameras would both write " + *same +
+                           ": give them names that differ in letters, digits, '-', '_' or '.'");
+  }
   return plan;
 }
 
@@ -419,8 +425,11 @@ GenerateOutcome generate(const GeneratePlan& plan, const GenerateHooks& hooks) {
   const fs::path& dir = plan.request.output_dir;
   create_output_folder(dir);
   if (plan.request.resume) {
+    // Only this shard's: another shard may be writing beside it, from a
+    // machine where its process id means nothing.
     const std::vector<std::string> names = generate_outputs(plan);
-    remove_stale_temporaries(dir, std::set<std::string>(names.begin(), names.end()));
+    const std::set<std::string> own(names.begin(), names.end());
+    remove_stale_temporaries(dir, [&](const std::string& target) { return own.count(target) > 0; });
   }
   GenerateOutcome outcome;
   // Reused from image to image: fresh images' memory costs a page fault
@@ -567,6 +576,13 @@ MergeOutcome merge_shards(const fs::path& dir) {
     if (m.version != first.version) differ("purkinje_version", m.version, first.version);
     if (m.count != first.count) differ("count", std::to_string(m.count), std::to_string(first.count));
     if (m.cameras != first.cameras) differ("cameras", std::to_string(m.cameras), std::to_string(first.cameras));
+    // Shard i holds the images i, i + n, ...: so many rows, no other.
+    const std::uint64_t images = m.count > i ? (m.count - 1 - i) / n + 1 : 0;
+    if (m.rows != images * m.cameras) {
+      throw std::runtime_error(it->second.string() + ": " + std::to_string(m.rows) + " rows; shard " +
+                               std::to_string(i) + " of " + std::to_string(n) + " of " + std::to_string(m.count) +
+                               " images has " + std::to_string(images * m.cameras));
+    }
     const std::string found = sha1_of_file(dir / m.table_file);
     if (found != m.table_sha1) {
       throw std::runtime_error((dir / m.table_file).string() + ": SHA-1 " + found + "; its manifest says " +
@@ -625,6 +641,11 @@ MergeOutcome merge_shards(const fs::path& dir) {
                                    std::to_string(k));
         }
         put(line);
+      }
+    }
+    for (std::size_t s = 0; s < in.size(); ++s) {
+      if (std::getline(in[s], line)) {
+        throw std::runtime_error((dir / shards[s].table_file).string() + ": rows beyond its manifest's");
       }
     }
     out.close();

@@ -1,9 +1,6 @@
 #include "purkinje/studies/render_set.h"
 
-#include <signal.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cstdlib>
 #include <iomanip>
 #include <map>
@@ -92,14 +89,6 @@ void render_unit(const RenderPlan& plan, const Scene& scene, const std::string& 
   }
 }
 
-// A hidden temporary a killed run left: its process is gone.
-void remove_stale_temporaries(const fs::path& dir) {
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::optional<long> pid = temporary_owner(e.path().filename().string());
-    if (pid && *pid > 0 && ::kill(static_cast<pid_t>(*pid), 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
-  }
-}
 
 // Whether every camera's files of a variation are in place and are what
 // this run would write: labels whose scene part (cameras, lights, eyes:

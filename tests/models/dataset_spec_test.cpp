@@ -171,6 +171,29 @@ TEST(DatasetSpec, GridEndsAreExactAndHugeProductsAndSliversDrawInRange) {
   EXPECT_NEAR(sum / 2000, 0.5, 5 * std::sqrt(1 / 12.0 / 2000));  // uniform, not always an end
 }
 
+TEST(DatasetSpec, AnEyeMovedOntoTheCameraIsRefusedAndFarTailsStillVary) {
+  const DatasetSpec onto = spec_with(R"("parameters": {"eye_offset_z_mm": -595})");
+  try {
+    scene_for_image(onto, draw_image(onto, 0));
+    ADD_FAILURE() << "accepted";
+  } catch (const DatasetSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find("camera 'cam0' lies within"), std::string::npos) << e.what();
+  }
+  // 40 sd out, where the CDF underflows: the tail's exponential, mean
+  // about a + 1/a.
+  const DatasetSpec tail = spec_with(R"("parameters": {"eye_offset_x_mm": {"normal": {"mean": 0, "sd": 1, "min": 40, "max": 41}}})");
+  double sum = 0, low = 41, high = 40;
+  for (std::uint64_t k = 0; k < 4000; ++k) {
+    const double v = draw_image(tail, k).values[0];
+    sum += v;
+    low = std::min(low, v);
+    high = std::max(high, v);
+  }
+  EXPECT_NEAR(sum / 4000, 40 + 1.0 / 40, 0.003);
+  EXPECT_LT(low, 40.001);
+  EXPECT_GT(high, 40.1);
+}
+
 TEST(DatasetSpec, ScreenTargetsAreFixated) {
   const DatasetSpec spec = spec_with(R"("gaze": {"screen": {"grid": [3, 2]}},
                                         "parameters": {"eye_offset_x_mm": {"uniform": [-40, 40]}})");
@@ -280,7 +303,7 @@ TEST(DatasetSpec, ADrawNoEyeCanHaveIsNamedWithItsImageAndValues) {
     FAIL() << "accepted";
   } catch (const DatasetSpecError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("t: image 0: "), std::string::npos) << m;
+    EXPECT_NE(m.find("t.json: image 0: "), std::string::npos) << m;
     EXPECT_NE(m.find("pupil"), std::string::npos) << m;
     EXPECT_NE(m.find("(drawn: pupil_radius_mm = "), std::string::npos) << m;
   }
@@ -334,6 +357,7 @@ const Malformed kMalformed[] = {
     {R"("parameters": {"illuminators": {"led_left": {"off": true}}})", "parameters.illuminators.led_left.off = true: unknown key (valid keys here: on, power_scale)"},
     {R"("parameters": {"meshes": {"glasses": {"on": false}}})", "parameters.meshes.glasses = {...}: unknown key"},
     {R"("parameters": {"exposure_s": 0})", "parameters.exposure_s = 0: must be in (0, 10] (exposure_s)"},
+    {R"("outputs": {"exr": {"planes": ["Y", "Y"]}})", "outputs.exr.planes[1] = \"Y\": is listed twice"},
     {R"("parameters": {"pupil_radius_mm": {"choice": [1, 2, 3], "weights": [1e308, 1e308, 0]}})",
      "parameters.pupil_radius_mm.weights = [1e+308, 1e+308, 0]: must have a finite sum"},
     {R"("parameters": {"focus_distance_mm": {"uniform": [10, 600]}})",

@@ -556,6 +556,20 @@ std::string bytes_of(const std::filesystem::path& file) {
   return s.str();
 }
 
+// The EXR plane names a data set may choose from, before any render, are
+// the planes a render writes (film.cpp makes them; render_output.cpp lists them).
+TEST(RenderFiles, ExrPlaneNamesAreTheRendersPlanes) {
+  const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/tests/data/tiny_remote.json");
+  for (const bool masks : {false, true}) {
+    RenderOptions options;
+    options.per_light_glint_masks = masks;
+    const RenderResult result = render(scene, 0, options);
+    std::vector<std::string> written = {"Y", "electrons"};
+    for (const NamedPlane& p : result.aovs) written.push_back(p.name);
+    EXPECT_EQ(exr_plane_names(scene, options), written) << masks;
+  }
+}
+
 TEST(RenderDeterminism, SameSeedSameBytesWithOneAndTwoThreads) {
   Scene scene = bundled("headset");
   open_eyelids(scene);

@@ -404,7 +404,7 @@ TEST(Generate, MergeRefusesWhatIsNotTheShardsOfOneSet) {
   fs::remove_all(dir);
 }
 
-TEST(Generate, PlanRefusesABadShardAnUnknownExrPlaneAndCamerasNamedAlike) {
+TEST(Generate, PlanRefusesABadShardBadExrPlanesAndCamerasNamedAlike) {
   const fs::path dir = fresh_dir("plan");
   GenerateRequest request;
   request.spec_file = write_spec(dir, "remote", R"("outputs": {"exr": {"planes": ["Y", "albedo"]}})", 2);
@@ -414,6 +414,17 @@ TEST(Generate, PlanRefusesABadShardAnUnknownExrPlaneAndCamerasNamedAlike) {
     FAIL() << "planned";
   } catch (const DatasetSpecError& e) {
     EXPECT_NE(std::string(e.what()).find("outputs.exr.planes = \"albedo\": the render has no such plane (valid: Y, electrons"),
+              std::string::npos)
+        << e.what();
+  }
+  // A light's glint plane, the light switched off in some images.
+  request.spec_file = write_spec(dir, "remote", R"("outputs": {"exr": {"planes": ["glint.led_left"]}},
+      "parameters": {"illuminators": {"led_left": {"on": {"choice": [true, false]}}}})", 2);
+  try {
+    plan_generate(request);
+    FAIL() << "planned";
+  } catch (const DatasetSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find("outputs.exr.planes = \"glint.led_left\": its illuminator is switched off"),
               std::string::npos)
         << e.what();
   }
@@ -430,7 +441,7 @@ TEST(Generate, PlanRefusesABadShardAnUnknownExrPlaneAndCamerasNamedAlike) {
     plan_generate(request);
     FAIL() << "planned";
   } catch (const DatasetSpecError& e) {
-    EXPECT_NE(std::string(e.what()).find("cameras 'a_b' and 'a b' would write the same files"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("two cameras would both write two_cameras_spec_000000_a_b."), std::string::npos)
         << e.what();
   }
   request.spec_file = write_spec(dir, "remote", "", 2);

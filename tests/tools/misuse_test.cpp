@@ -199,7 +199,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"GenerateFromAFifo", "generate {W}/fifo -o {W}/out", 1, "cannot read: is a FIFO (named pipe)"},
         Case{"GenerateAnUnknownParameter", "generate {W}/bad_spec.json -o {W}/out", 1,
              "bad_spec.json: parameters.pupil_size = 2: unknown key"},
-        Case{"GenerateAnEyeNoneCanHave", "generate {W}/no_eye_spec.json -o {W}/out", 1, "t: image 0: "},
+        Case{"GenerateAnEyeNoneCanHave", "generate {W}/no_eye_spec.json -o {W}/out", 1, "no_eye_spec.json: image 0: "},
         Case{"GenerateShardBeyondItsCount", "generate {W}/spec.json -o {W}/out --shard 4/4", 2,
              "--shard 4/4: must be I/N with 0 <= I < N"},
         Case{"GenerateShardNotNumbers", "generate {W}/spec.json -o {W}/out --shard one/4", 2, "--shard one/4: must be"},

@@ -75,7 +75,11 @@ struct DatasetSpec {
   int edge_samples_per_pixel = 16;
   DatasetOutputs outputs;
   std::vector<VariedParameter> parameters;  // the table's column order
-  std::string text;  // the spec as read, for its hash
+  // As read, for the set's hash (the scene's text is the one parsed: an
+  // edit while shards start cannot slip past it), and the spec's name in
+  // messages.
+  std::string text, scene_text;
+  std::string source;
 };
 
 // Reads and validates a spec and the scene it names (relative to the

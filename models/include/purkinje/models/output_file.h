@@ -94,6 +94,15 @@ void release_temporary(const std::filesystem::path& temporary);
 std::optional<long> temporary_owner(std::string_view name);
 inline bool is_temporary_name(std::string_view name) { return temporary_owner(name).has_value(); }
 
+// Removes the hidden temporaries in `dir` that a dead process left: one
+// whose process is gone, or whose process id is this process's own (a
+// retried container's process is PID 1 again). Call it before this
+// process makes a temporary in `dir`. With `own`, only the temporaries of
+// the targets it accepts (by file name): another process, on another
+// machine, may be writing beside them.
+void remove_stale_temporaries(const std::filesystem::path& dir,
+                              const std::function<bool(const std::string& target)>& own = {});
+
 // Installs handlers for SIGINT, SIGTERM and SIGHUP (those not ignored
 // already) that remove every registered temporary, then end the process by
 // the signal itself, which a shell reports as 130, 143 and 129. For the

@@ -70,8 +70,10 @@ struct GenerateOutcome {
 };
 
 // Renders and writes the plan. Throws OutputError when a file cannot be
-// written (nothing partial is left) and ResumeRefused (render_set.h) when
-// the folder holds another set's images under this set's names.
+// written (nothing partial is left: each image's files are all or
+// nothing), ResumeRefused (render_set.h) when the folder holds another
+// set's images under this set's names, and std::invalid_argument naming
+// the spec and the image for a scene the renderer refuses.
 GenerateOutcome generate(const GeneratePlan& plan, const GenerateHooks& hooks = {});
 
 // The file names shard `shard` gives its table and manifest; the whole

@@ -98,6 +98,15 @@ void release_temporary(const std::filesystem::path& temporary) {
   }
 }
 
+std::string portable_file_name(std::string name) {
+  for (char& c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+                    c == '_' || c == '.';
+    if (!ok) c = '_';
+  }
+  return name;
+}
+
 void remove_stale_temporaries(const std::filesystem::path& dir,
                               const std::function<bool(const std::string& target)>& own) {
   std::error_code ec;  // an unreachable folder is the writes' to report

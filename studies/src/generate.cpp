@@ -36,15 +36,6 @@ constexpr int kManifestFormat = 1;
 // The image files a set may write, in the labels' and the table's order.
 constexpr const char* kFileKinds[] = {"image", "segmentation", "exr", "labels"};
 
-std::string portable(std::string text) {
-  for (char& c : text) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
-                    c == '_' || c == '.';
-    if (!ok) c = '_';
-  }
-  return text;
-}
-
 // At least 6 digits, whatever the set's count: image k's names (and its
 // labels, which name its files) are the same in a trial and the set.
 std::string padded(std::uint64_t k) {
@@ -54,7 +45,7 @@ std::string padded(std::uint64_t k) {
 }
 
 std::string image_stem(const GeneratePlan& plan, std::uint64_t k, int camera) {
-  return portable(plan.spec.name + "_" + padded(k) + "_" + plan.spec.scene.cameras[camera].name());
+  return portable_file_name(plan.spec.name + "_" + padded(k) + "_" + plan.spec.scene.cameras[camera].name());
 }
 
 std::string number_text(const nlohmann::json& v) {

@@ -26,16 +26,8 @@ namespace {
 namespace fs = std::filesystem;
 namespace r = renderer;
 
-// File names keep to a portable set of characters.
 std::string file_stem(const std::string& prefix, const std::string& camera) {
-  std::string stem = prefix.empty() ? "scene" : prefix;
-  stem += "_" + camera;
-  for (char& c : stem) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
-                    c == '_' || c == '.';
-    if (!ok) c = '_';
-  }
-  return stem;
+  return portable_file_name((prefix.empty() ? "scene" : prefix) + "_" + camera);
 }
 
 // Variation k's stem among `count`: "<scene>_v<k>", k with at least 4 digits.

@@ -94,6 +94,10 @@ void release_temporary(const std::filesystem::path& temporary);
 std::optional<long> temporary_owner(std::string_view name);
 inline bool is_temporary_name(std::string_view name) { return temporary_owner(name).has_value(); }
 
+// `name` with every character but letters, digits, '-', '_' and '.'
+// replaced by '_': file names that every file system and shell take.
+std::string portable_file_name(std::string name);
+
 // Removes the hidden temporaries in `dir` that a dead process left: one
 // whose process is gone, or whose process id is this process's own (a
 // retried container's process is PID 1 again). Call it before this

@@ -1,10 +1,8 @@
 #include "purkinje/studies/generate.h"
 
 #include <OpenImageIO/hash.h>
-#include <signal.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <fstream>
 #include <map>
 #include <memory>

@@ -45,13 +45,11 @@ struct Status {
   int signal = 0;   // when killed by a signal
 };
 
-// `purkinje render` of the tiny scene's set into `dir`, with `extra`
-// arguments and `environment` ("VAR=value", or empty).
-Status render_set(const fs::path& dir, const std::string& extra, const std::string& environment = "") {
+// purkinje with `arguments`, in `environment` ("VAR=value", or empty),
+// its output dropped: how it ended.
+Status run(const std::string& arguments, const std::string& environment) {
   const std::string command = (environment.empty() ? "" : "env " + environment + " ") + "'" + kExecutable.string() +
-                              "' render '" + (kSourceDir / "tests/data/tiny_remote.json").string() + "' -o '" +
-                              dir.string() + "' --variations " + std::to_string(kVariations) + " " + extra +
-                              " > /dev/null 2>&1";
+                              "' " + arguments + " > /dev/null 2>&1";
   const int status = std::system(command.c_str());
   Status s;
   // std::system runs sh -c, which may exec the command (then a signal
@@ -64,6 +62,14 @@ Status render_set(const fs::path& dir, const std::string& extra, const std::stri
     if (s.code > 128) s.signal = s.code - 128;
   }
   return s;
+}
+
+// `purkinje render` of the tiny scene's set into `dir`, with `extra`
+// arguments.
+Status render_set(const fs::path& dir, const std::string& extra, const std::string& environment = "") {
+  return run("render '" + (kSourceDir / "tests/data/tiny_remote.json").string() + "' -o '" + dir.string() +
+                 "' --variations " + std::to_string(kVariations) + " " + extra,
+             environment);
 }
 
 class Interrupted : public ::testing::Test {
@@ -217,19 +223,7 @@ constexpr int kImages = 12;
 
 Status generate(const fs::path& spec, const fs::path& dir, const std::string& extra,
                 const std::string& environment = "") {
-  const std::string command = (environment.empty() ? "" : "env " + environment + " ") + "'" + kExecutable.string() +
-                              "' generate '" + spec.string() + "' -o '" + dir.string() + "' " + extra +
-                              " > /dev/null 2>&1";
-  const int status = std::system(command.c_str());
-  Status s;
-  if (WIFSIGNALED(status)) {
-    s.signal = WTERMSIG(status);
-  } else if (WIFEXITED(status)) {
-    s.exited = true;
-    s.code = WEXITSTATUS(status);
-    if (s.code > 128) s.signal = s.code - 128;
-  }
-  return s;
+  return run("generate '" + spec.string() + "' -o '" + dir.string() + "' " + extra, environment);
 }
 
 class GenerateInterrupted : public ::testing::Test {

@@ -22,8 +22,6 @@
 // from square.obj) for gaze, screen, lid, illuminator and mesh parameters,
 // and a FIFO, fifo.json, which a spec may name: refused, not blocking.
 
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -32,9 +30,7 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 #include <string>
-#include <system_error>
 
 #include "fuzz_target.h"
 #include "purkinje/models/camera_optics.h"
@@ -68,40 +64,8 @@ constexpr const char* kSquareObj =
     "v 0 1 0\n"
     "f 1 2 3 4\n";
 
-// The folder, made on first use and removed at a normal exit (a crash
-// leaves it behind, in the temporary directory).
-class SpecFolder {
- public:
-  SpecFolder() {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "purkinje-dataset-spec-fuzz-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      std::perror("dataset_spec fuzz target: mkdtemp");
-      std::abort();
-    }
-    path_ = pattern;
-    std::ofstream(path_ / "scene.json") << kSceneJson;
-    std::ofstream(path_ / "square.obj") << kSquareObj;
-    if (::mkfifo((path_ / "fifo.json").c_str(), 0600) != 0) {
-      std::perror("dataset_spec fuzz target: mkfifo");
-      std::abort();
-    }
-  }
-  ~SpecFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  SpecFolder(const SpecFolder&) = delete;
-  SpecFolder& operator=(const SpecFolder&) = delete;
-
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
 const std::filesystem::path& spec_folder() {
-  static const SpecFolder folder;
+  static const FuzzFolder folder("dataset-spec", {{"scene.json", kSceneJson}, {"square.obj", kSquareObj}}, "fifo.json");
   return folder.path();
 }
 

@@ -14,15 +14,11 @@
 // Absolute names reach the real file system; the reader opens them
 // read-only and refuses anything but a regular file of sane size.
 
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <string>
-#include <system_error>
 
 #include "fuzz_target.h"
 #include "purkinje/models/scene_file.h"
@@ -37,38 +33,8 @@ constexpr const char* kSquareObj =
     "v 0 1 0\n"
     "f 1 2 3 4\n";
 
-// The folder, made on first use and removed at a normal exit (a crash
-// leaves it behind, in the temporary directory).
-class MeshFolder {
- public:
-  MeshFolder() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "purkinje-scene-fuzz-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      std::perror("scene fuzz target: mkdtemp");
-      std::abort();
-    }
-    path_ = pattern;
-    std::ofstream(path_ / "square.obj") << kSquareObj;
-    if (::mkfifo((path_ / "fifo.obj").c_str(), 0600) != 0) {
-      std::perror("scene fuzz target: mkfifo");
-      std::abort();
-    }
-  }
-  ~MeshFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  MeshFolder(const MeshFolder&) = delete;
-  MeshFolder& operator=(const MeshFolder&) = delete;
-
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
 const std::filesystem::path& mesh_folder() {
-  static const MeshFolder folder;
+  static const FuzzFolder folder("scene", {{"square.obj", kSquareObj}}, "fifo.obj");
   return folder.path();
 }
 

@@ -258,16 +258,24 @@ class Object {
   }
 
   // Exactly one of `a` and `b`; returns true for `a`.
-  bool one_of(const std::string& a, const std::string& b) {
-    const bool has_a = has(a), has_b = has(b);
-    if (has_a && has_b) {
-      where().fail("", "give exactly one of " + a + " and " + b + ", not both");
+  bool one_of(const std::string& a, const std::string& b) { return one_of({a, b}) == 0; }
+  // Exactly one of `keys` (two or more); returns its index.
+  std::size_t one_of(const std::vector<std::string>& keys) {
+    std::vector<std::size_t> present;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (has(keys[i])) present.push_back(i);
     }
-    if (!has_a && !has_b) {
-      where().fail("", "missing required key: give one of " + a + " and " + b +
-                           misspelling_hint({a, b}));
+    std::string listed;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      listed += (i == 0 ? "" : i + 1 == keys.size() ? " and " : ", ") + keys[i];
     }
-    return has_a;
+    if (present.size() > 1) {
+      where().fail("", "give exactly one of " + listed + (keys.size() == 2 ? ", not both" : ", not several"));
+    }
+    if (present.empty()) {
+      where().fail("", "missing required key: give one of " + listed + misspelling_hint(keys));
+    }
+    return present.front();
   }
 
   void finish() const {

@@ -8,10 +8,12 @@
 #include "purkinje/models/input_file.h"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <climits>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -34,6 +36,34 @@ constexpr int kMaxResolutionPx = 65536;
 constexpr double kDegenerateSine = 1e-12;
 
 using namespace json_reader;
+
+// A direction as given when it is a unit vector to rounding (a dumped
+// scene's: normalizing again could move its last bits), else normalized.
+UnitVector3 unit_as_given(const Vector3& v) {
+  if (std::abs(v.squared_norm() - 1.0) <= 8 * std::numeric_limits<double>::epsilon()) {
+    return UnitVector3::from_normalized_unchecked(v);
+  }
+  return UnitVector3::normalize(v);
+}
+
+// A rotation given as its matrix, rows of three: exact, as a dump needs.
+Rotation read_rotation_matrix(const Value& m) {
+  const std::string rule = "must be a 3 x 3 rotation matrix, rows [[r00, r01, r02], [r10, r11, r12], [r20, r21, r22]]";
+  if (!m.raw().is_array() || m.raw().size() != 3) m.fail(rule);
+  std::array<std::vector<double>, 3> rows;
+  for (int i = 0; i < 3; ++i) {
+    const Value row = m.elements()[i];
+    if (!row.raw().is_array() || row.raw().size() != 3) m.fail(rule);
+    rows[i] = row.as_numbers(3);
+  }
+  const Vector3 x{rows[0][0], rows[1][0], rows[2][0]}, y{rows[0][1], rows[1][1], rows[2][1]},
+      z{rows[0][2], rows[1][2], rows[2][2]};
+  try {
+    return Rotation::from_columns(unit_as_given(x), unit_as_given(y), unit_as_given(z));
+  } catch (const std::invalid_argument&) {
+    m.fail("must be a rotation: orthonormal columns, right-handed (determinant +1), within 1e-9");
+  }
+}
 
 // ---------------------------------------------------------------- cameras
 
@@ -145,7 +175,9 @@ Camera read_camera(Object& c, std::size_t index) {
 
   const Point3 position = c.get<Point3>("position_mm");
   Pose world_from_camera;
-  if (c.one_of("look_at_mm", "rotation_vector_deg")) {
+  const std::size_t orientation = c.one_of({"look_at_mm", "rotation_vector_deg", "rotation_matrix"});
+  if (orientation != 0 && c.has("up")) c.required("up").fail("only used with look_at_mm");
+  if (orientation == 0) {
     const Value look_at = c.required("look_at_mm");
     const Point3 target = look_at.as_point3();
     const Vector3 forward = target - position;
@@ -161,10 +193,11 @@ Camera read_camera(Object& c, std::size_t index) {
       look_at.fail("looks straight along the default up [0, -1, 0]: give \"up\"");
     }
     world_from_camera = camera_looking_at(position, target, up);
-  } else {
-    if (c.has("up")) c.required("up").fail("only used with look_at_mm");
+  } else if (orientation == 1) {
     const Vector3 degrees = c.get<Vector3>("rotation_vector_deg");
     world_from_camera = Pose(Rotation::from_rotation_vector(degrees * kDegree), position.from_origin());
+  } else {
+    world_from_camera = Pose(read_rotation_matrix(c.required("rotation_matrix")), position.from_origin());
   }
   c.finish();
   return Camera(name, intrinsics, distortion, world_from_camera, sensor);
@@ -190,7 +223,8 @@ Illuminator read_illuminator(Object& l, std::size_t index) {
 // along `down` (by default world +x and +y, a screen facing an eye that
 // looks along -z, as the bundled scenes have it).
 Screen read_screen(Object& s) {
-  const Point3 center = s.get<Point3>("center_mm");
+  const bool centered = s.one_of("center_mm", "top_left_mm");
+  const Point3 anchor = s.get<Point3>(centered ? "center_mm" : "top_left_mm");
   const Value size = s.required("size_mm", "the width and height in mm, [w, h]");
   const std::vector<double> wh = size.as_numbers(2);
   if (!(wh[0] > 0 && wh[1] > 0)) size.fail("width and height must be > 0");
@@ -199,53 +233,87 @@ Screen read_screen(Object& s) {
   const Vector3 right = right_value ? right_value->direction() : Vector3{1, 0, 0};
   const Vector3 down = down_value ? down_value->direction() : Vector3{0, 1, 0};
   s.finish();
-  const UnitVector3 r = UnitVector3::normalize(right), d = UnitVector3::normalize(down);
+  const UnitVector3 r = unit_as_given(right), d = unit_as_given(down);
   if (!(std::abs(dot(r, d)) < 1e-6)) {
     (down_value ? *down_value : right_value ? *right_value : size).fail("right and down must be perpendicular");
   }
-  return Screen::centered(center, wh[0], wh[1], r, d);
+  if (centered) return Screen::centered(anchor, wh[0], wh[1], r, d);
+  return Screen{anchor, r, d, wh[0], wh[1]};
 }
 
 // ----------------------------------------------------------------- meshes
 
-// A mesh file placed in the world: world = position + R (scale * file),
-// R the rotation vector's. The file is read last, so that a misspelt key
-// is reported before a large file is read.
+// Vertices and triangles given in the scene itself (a dump, or a mesh
+// built in code): indices from 0, each below the vertex count.
+ObjMesh read_inline_mesh(Object& m) {
+  ObjMesh mesh;
+  const Value vertices = m.required("vertices_mm");
+  for (const Value& v : vertices.elements()) mesh.vertices.push_back(v.as_point3());
+  if (mesh.vertices.empty()) vertices.fail("must hold at least 3 vertices");
+  const Value triangles = m.required("triangles", "[[i, j, k], ...], vertex indices from 0");
+  for (const Value& t : triangles.elements()) {
+    if (!t.raw().is_array() || t.raw().size() != 3) t.fail("must be an array of 3 vertex indices");
+    Triangle triangle{};
+    for (int k = 0; k < 3; ++k) {
+      const Value index = t.elements()[k];
+      const int i = index.as_int();
+      if (i < 0 || static_cast<std::size_t>(i) >= mesh.vertices.size()) {
+        index.fail("must be a vertex index from 0 to " + std::to_string(mesh.vertices.size() - 1));
+      }
+      triangle[k] = static_cast<std::uint32_t>(i);
+    }
+    mesh.triangles.push_back(triangle);
+  }
+  if (mesh.triangles.empty()) triangles.fail("must hold at least one triangle");
+  return mesh;
+}
+
+// A mesh placed in the world: world = position + R (scale * v), R the
+// rotation vector's, its vertices from an OBJ file or given inline. The
+// file is read last, so that a misspelt key is reported before a large
+// file is read.
 Mesh read_mesh(Object& m, std::size_t index, const std::filesystem::path& folder) {
   Mesh mesh;
   mesh.name = m.get_or<std::string>("name", "mesh" + std::to_string(index));
   if (mesh.name.empty()) m.required("name").fail("must not be empty");
-  const Value file = m.required("file", "a Wavefront OBJ file, relative to the scene file's folder");
-  const std::filesystem::path file_name = file.as_string();
-  if (file_name.empty()) file.fail("must not be empty");
+  const bool from_file = m.one_of("file", "vertices_mm");
   // No default: nothing is typical of an arbitrary object.
   mesh.albedo = m.required("albedo", "its Lambertian albedo, 0 to 1").within(0, 1);
   const Point3 position = m.get_or<Point3>("position_mm", Point3::origin());
   const Vector3 degrees = m.get_or<Vector3>("rotation_vector_deg", Vector3{});
   const double scale = m.positive_or("scale", 1.0);
-  m.finish();
-
-  const std::filesystem::path path = file_name.is_absolute() ? file_name : folder / file_name;
-  std::error_code ignored;
-  if (!std::filesystem::exists(path, ignored)) {
-    file.fail(path == file_name ? "no such file" : "no such file (looked for " + path.string() + ")");
-  }
+  const Value source = m.required(from_file ? "file" : "vertices_mm");
   ObjMesh obj;
-  try {
-    obj = load_obj(path);
-  } catch (const ObjError& error) {
-    file.fail(error.what());
+  if (from_file) {
+    const std::filesystem::path file_name = source.as_string();
+    if (file_name.empty()) source.fail("must not be empty");
+    if (m.has("triangles")) m.required("triangles").fail("only used with vertices_mm");
+    m.finish();
+    const std::filesystem::path path = file_name.is_absolute() ? file_name : folder / file_name;
+    std::error_code ignored;
+    if (!std::filesystem::exists(path, ignored)) {
+      source.fail(path == file_name ? "no such file" : "no such file (looked for " + path.string() + ")");
+    }
+    try {
+      obj = load_obj(path);
+    } catch (const ObjError& error) {
+      source.fail(error.what());
+    }
+  } else {
+    obj = read_inline_mesh(m);
+    m.finish();
   }
 
+  // Identity placement keeps the vertices' bits (a dump's are world points).
+  const bool placed = !(position == Point3::origin() && degrees == Vector3{} && scale == 1.0);
   const Rotation rotation = Rotation::from_rotation_vector(degrees * kDegree);
   mesh.vertices.reserve(obj.vertices.size());
   for (std::size_t i = 0; i < obj.vertices.size(); ++i) {
-    const Point3 p = position + rotation * (obj.vertices[i].from_origin() * scale);
+    const Point3 p = placed ? position + rotation * (obj.vertices[i].from_origin() * scale) : obj.vertices[i];
     if (!p.is_finite() || std::abs(p.x) > kMaxCoordinateMm || std::abs(p.y) > kMaxCoordinateMm ||
         std::abs(p.z) > kMaxCoordinateMm) {
-      file.fail("vertex " + std::to_string(i + 1) + " lands at " + format_point(p) +
-                " mm, beyond +-" + format_number(kMaxCoordinateMm) +
-                " mm (1 km): check scale and position_mm");
+      source.fail("vertex " + std::to_string(i + (from_file ? 1 : 0)) + " lands at " + format_point(p) +
+                  " mm, beyond +-" + format_number(kMaxCoordinateMm) + " mm (1 km): check scale and position_mm");
     }
     mesh.vertices.push_back(p);
   }
@@ -259,9 +327,9 @@ Mesh read_mesh(Object& m, std::size_t index, const std::filesystem::path& folder
     if (cross(a, b).norm() > kDegenerateSine * a.norm() * b.norm()) mesh.triangles.push_back(t);
   }
   if (mesh.triangles.empty()) {
-    file.fail("all " + std::to_string(obj.triangles.size()) + " triangles have zero area once placed (scale " +
-              format_number(scale) + ", position_mm " + format_point(position) +
-              "): check scale and position_mm");
+    source.fail("all " + std::to_string(obj.triangles.size()) + " triangles have zero area once placed (scale " +
+                format_number(scale) + ", position_mm " + format_point(position) +
+                "): check scale and position_mm");
   }
   return mesh;
 }
@@ -401,7 +469,7 @@ EyeAppearance read_appearance(Object& e) {
     if (forward_value) forward = forward_value->direction();
     const auto up_value = head.optional("up");
     if (up_value) up = up_value->direction();
-    const Vector3 f = forward / forward.norm();
+    const UnitVector3 f = unit_as_given(forward);
     if (cross(f, up / up.norm()).norm() < 1e-6) {
       if (up_value) up_value->fail("must not be parallel to head.forward");
       // The defaults are perpendicular: only a given forward meets the default up.
@@ -410,8 +478,10 @@ EyeAppearance read_appearance(Object& e) {
     head.finish();
     // As a camera's up: only the part across the forward direction counts,
     // so the renderer gets an orthonormal pair.
-    a.head_forward = UnitVector3::normalize(f);
-    a.head_up = UnitVector3::normalize(up - dot(up, f) * f);
+    a.head_forward = f;
+    const double along = dot(up, f);
+    a.head_up = std::abs(along) <= 8 * std::numeric_limits<double>::epsilon() ? unit_as_given(up)
+                                                                               : UnitVector3::normalize(up - along * f);
   }
   return a;
 }
@@ -428,7 +498,7 @@ Eye read_eye(Object& e) {
   Object orientation = e.object("orientation");
   std::optional<Eye> eye;
   if (auto target_value = orientation.optional("gaze_target_mm")) {
-    for (const char* key : {"yaw_deg", "pitch_deg"}) {
+    for (const char* key : {"yaw_deg", "pitch_deg", "optical_axis"}) {
       if (orientation.has(key)) {
         orientation.required(key).fail("cannot be combined with gaze_target_mm");
       }
@@ -449,6 +519,13 @@ Eye read_eye(Object& e) {
     } catch (const std::invalid_argument& error) {
       target_value->fail(error.what());
     }
+  } else if (auto axis_value = orientation.optional("optical_axis")) {
+    for (const char* key : {"yaw_deg", "pitch_deg"}) {
+      if (orientation.has(key)) orientation.required(key).fail("cannot be combined with optical_axis");
+    }
+    const UnitVector3 axis = unit_as_given(axis_value->direction());
+    eye = at_cornea_center ? Eye::with_cornea_center(model, anchor_point, axis)
+                           : Eye::with_rotation_center(model, anchor_point, axis);
   } else {
     const double yaw = orientation.has("yaw_deg") ? orientation.required("yaw_deg").within(-180, 180) : 0.0;
     const double pitch =
@@ -555,6 +632,153 @@ Scene read_scene(const std::string& text, const std::string& source_name, const 
 }
 
 }  // namespace
+
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+ordered_json triple(double x, double y, double z) { return ordered_json::array({x, y, z}); }
+ordered_json point(const Point3& p) { return triple(p.x, p.y, p.z); }
+ordered_json direction(const UnitVector3& v) { return triple(v.x(), v.y(), v.z()); }
+
+ordered_json sensor_json(const Sensor& s) {
+  ordered_json o;
+  o["pixel_pitch_mm"] = s.pixel_pitch_mm;
+  o["f_number"] = s.f_number;
+  o["exposure_s"] = s.exposure_s;
+  o["quantum_efficiency"] = s.quantum_efficiency;
+  o["full_well_e"] = s.full_well_e;
+  o["read_noise_e"] = s.read_noise_e;
+  o["gain"] = s.gain;
+  o["bits"] = s.bits;
+  o["psf_sigma_px"] = s.psf_sigma_px;
+  if (s.focus_distance_mm) o["focus_distance_mm"] = *s.focus_distance_mm;
+  o["noise"] = s.noise;
+  return o;
+}
+
+ordered_json camera_json(const Camera& c) {
+  const Intrinsics& k = c.intrinsics();
+  const Distortion& d = c.distortion();
+  const Rotation& r = c.world_from_camera().rotation();
+  ordered_json o;
+  o["name"] = c.name();
+  o["resolution_px"] = {k.width, k.height};
+  o["intrinsics_px"] = {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}};
+  o["distortion"] = {{"k1", d.k1}, {"k2", d.k2}, {"p1", d.p1}, {"p2", d.p2}, {"k3", d.k3}};
+  o["position_mm"] = point(c.center());
+  o["rotation_matrix"] = ordered_json::array();
+  for (int row = 0; row < 3; ++row) o["rotation_matrix"].push_back(triple(r(row, 0), r(row, 1), r(row, 2)));
+  o["sensor"] = sensor_json(c.sensor());
+  return o;
+}
+
+ordered_json eye_json(const Eye& eye, std::size_t index) {
+  const EyeModel& m = eye.model();
+  const std::string where = "eyes[" + std::to_string(index) + "]";
+  if (!eye_model_preset(m.name)) {
+    throw std::invalid_argument(where + ": model \"" + m.name +
+                                "\" is no preset, and a scene file starts every eye from one (" +
+                                join(eye_model_preset_names()) + ")");
+  }
+  // The format orients an eye by its optical axis alone (eye.h's frame).
+  const Rotation& r = eye.world_from_eye().rotation();
+  const Rotation expected = world_from_eye_rotation(eye.optical_axis());
+  for (int i = 0; i < 9; ++i) {
+    if (std::abs(r(i / 3, i % 3) - expected(i / 3, i % 3)) > 1e-12) {
+      throw std::invalid_argument(where + ": turned about its optical axis, which a scene file cannot express");
+    }
+  }
+  ordered_json o;
+  o["model"] = m.name;
+  o["cornea"] = {{"radius_mm", m.anterior_cornea.radius_mm},
+                 {"asphericity", m.anterior_cornea.asphericity},
+                 {"limbus_radius_mm", m.limbus_radius_mm}};
+  if (m.posterior_cornea) {
+    const PosteriorCornea& p = *m.posterior_cornea;
+    o["posterior_cornea"] = {{"radius_mm", p.surface.radius_mm},
+                             {"asphericity", p.surface.asphericity},
+                             {"thickness_mm", p.thickness_mm},
+                             {"index", p.cornea_index}};
+  } else {
+    o["posterior_cornea"] = "none";
+  }
+  o["aqueous_index"] = m.aqueous_index;
+  o["iris"] = {{"depth_mm", m.iris_depth_mm}, {"radius_mm", m.iris_radius_mm}};
+  o["pupil"] = {{"radius_mm", m.pupil_radius_mm},
+                {"decentration_mm", {m.pupil_decentration_x_mm, m.pupil_decentration_y_mm}}};
+  o["rotation_center_depth_mm"] = m.rotation_center_depth_mm;
+  o["sclera_radius_mm"] = m.sclera_radius_mm;
+  // Radians read from degrees (d * pi/180) come back exactly from the
+  // quotient; radians set in code may lie between two such products and
+  // come back within an ulp.
+  o["kappa_deg"] = {{"horizontal", m.kappa_horizontal_rad / kDegree}, {"vertical", m.kappa_vertical_rad / kDegree}};
+  o["position"] = {{"cornea_center_mm", point(eye.cornea_center())}};
+  o["orientation"] = {{"optical_axis", direction(eye.optical_axis())}};
+  const EyeAppearance& a = eye.appearance();
+  o["appearance"] = {{"iris_albedo", a.iris_albedo},
+                     {"iris_texture_contrast", a.iris_texture_contrast},
+                     {"iris_seed", a.iris_seed},
+                     {"sclera_albedo", a.sclera_albedo},
+                     {"skin_albedo", a.skin_albedo},
+                     {"fundus_reflectance", a.fundus_reflectance}};
+  // Without lids the head frame places nothing, and the format has none.
+  if (a.eyelids) {
+    const Eyelids& l = *a.eyelids;
+    o["eyelids"] = {{"opening", l.opening},
+                    {"upper_margin_mm", l.upper_margin_mm},
+                    {"lower_margin_mm", l.lower_margin_mm},
+                    {"closing_line_mm", l.closing_line_mm},
+                    {"half_width_mm", l.half_width_mm},
+                    {"upper_gain_upgaze", l.upper_gain_upgaze},
+                    {"upper_gain_downgaze", l.upper_gain_downgaze},
+                    {"lower_gain_upgaze", l.lower_gain_upgaze},
+                    {"lower_gain_downgaze", l.lower_gain_downgaze}};
+    o["head"] = {{"forward", direction(a.head_forward)}, {"up", direction(a.head_up)}};
+  }
+  return o;
+}
+
+ordered_json mesh_json(const Mesh& mesh) {
+  ordered_json o;
+  o["name"] = mesh.name;
+  o["albedo"] = mesh.albedo;
+  ordered_json& vertices = o["vertices_mm"] = ordered_json::array();
+  for (const Point3& p : mesh.vertices) vertices.push_back(point(p));
+  ordered_json& triangles = o["triangles"] = ordered_json::array();
+  for (const Triangle& t : mesh.triangles) triangles.push_back({t[0], t[1], t[2]});
+  return o;
+}
+
+}  // namespace
+
+std::string scene_to_json(const Scene& scene) {
+  ordered_json root;
+  root["format"] = kSceneFormatVersion;
+  root["name"] = scene.name;
+  root["cameras"] = ordered_json::array();
+  for (const Camera& c : scene.cameras) root["cameras"].push_back(camera_json(c));
+  root["illuminators"] = ordered_json::array();
+  for (const Illuminator& l : scene.illuminators) {
+    root["illuminators"].push_back({{"name", l.name},
+                                    {"position_mm", point(l.position)},
+                                    {"radiant_intensity_w_sr", l.radiant_intensity_w_sr},
+                                    {"wavelength_nm", l.wavelength_nm},
+                                    {"emitter_diameter_mm", l.emitter_diameter_mm}});
+  }
+  root["eyes"] = ordered_json::array();
+  for (std::size_t i = 0; i < scene.eyes.size(); ++i) root["eyes"].push_back(eye_json(scene.eyes[i], i));
+  root["meshes"] = ordered_json::array();
+  for (const Mesh& m : scene.meshes) root["meshes"].push_back(mesh_json(m));
+  if (scene.screen) {
+    const Screen& s = *scene.screen;
+    root["screen"] = {{"top_left_mm", point(s.top_left)},
+                      {"size_mm", {s.width_mm, s.height_mm}},
+                      {"right", direction(s.right)},
+                      {"down", direction(s.down)}};
+  }
+  return root.dump(2) + "\n";
+}
 
 Scene parse_scene(const std::string& text, const std::string& source_name, const std::filesystem::path& folder) {
   try {

@@ -772,7 +772,7 @@ TEST(SceneFile, MeshMistakesNameTheKeyTheValueAndTheRule) {
       {R"({ "file": "meshes/square.obj" })",
        "meshes[0].albedo: missing required key (its Lambertian albedo, 0 to 1)"},
       {R"({ "albedo": 0.5 })",
-       "meshes[0].file: missing required key (a Wavefront OBJ file, relative to the scene file's folder)"},
+       "meshes[0]: missing required key: give one of file and vertices_mm"},
       {R"({ "file": "", "albedo": 0.5 })", "meshes[0].file = \"\": must not be empty"},
       {R"({ "file": 3, "albedo": 0.5 })", "meshes[0].file = 3: must be a string"},
       {R"({ "name": "", "file": "meshes/square.obj", "albedo": 0.5 })", "meshes[0].name = \"\": must not be empty"},
@@ -781,7 +781,9 @@ TEST(SceneFile, MeshMistakesNameTheKeyTheValueAndTheRule) {
        "meshes[0].position_mm = [0, 0]: must be an array of 3 numbers"},
       {R"({ "file": "meshes/square.obj", "albedo": 0.5, "rotation": [0, 0, 90] })",
        "meshes[0].rotation = [0, 0, 90]: unknown key (valid keys here: albedo, file, name, position_mm, "
-       "rotation_vector_deg, scale)"},
+       "rotation_vector_deg, scale, triangles, vertices_mm)"},
+      {R"({ "file": "meshes/square.obj", "albedo": 0.5, "triangles": [[0, 1, 2]] })",
+       "meshes[0].triangles = [[0, 1, 2]]: only used with vertices_mm"},
       // 1e300 x 1 mm is a coordinate no tracker sees, and would overflow distances.
       {R"({ "file": "meshes/square.obj", "albedo": 0.5, "scale": 1e300 })",
        "meshes[0].file = \"meshes/square.obj\": vertex 2 lands at [1e+300, 0, 0] mm, beyond +-1e+06 mm (1 km): "
@@ -869,7 +871,7 @@ const std::map<std::string, std::string> kMalformed = {
      "number"},
     {"mesh_unknown_key",
      "meshes[0].colour = 0.3: unknown key (valid keys here: albedo, file, name, position_mm, "
-     "rotation_vector_deg, scale)"},
+     "rotation_vector_deg, scale, triangles, vertices_mm)"},
     {"missing_eye_position", "eyes[0].position: missing required key; found \"positon\""},
     {"missing_pixel_pitch", "cameras[0].pixel_pitch_mm: missing required key"},
     {"negative_cornea_radius", "eyes[0].cornea.radius_mm = -7.8: must be > 0"},

@@ -27,4 +27,14 @@ Scene load_scene(const std::filesystem::path& file);
 Scene parse_scene(const std::string& text, const std::string& source_name,
                   const std::filesystem::path& folder = {});
 
+// The scene as a scene file in plain JSON (no comments), ending in a
+// newline: parse_scene reads it back to the same scene bit for bit. Every
+// value is written, numbers exactly; cameras by their intrinsics and
+// rotation matrix, eyes by cornea centre and optical axis, the screen by
+// its top-left corner, meshes inline in world coordinates. Throws
+// std::invalid_argument for what the format cannot hold: an eye model
+// that is no preset's (a file starts each eye from one), or an eye turned
+// about its optical axis.
+std::string scene_to_json(const Scene& scene);
+
 }  // namespace purkinje

@@ -15,6 +15,8 @@ packages=(
   # that name functions and lines.
   clang libclang-rt-14-dev llvm
   gcovr python3
+  # The Python package (python/, docs/python.md) and its tests.
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-pil python3-pandas python3-torch
   # The Slurm test (tests/slurm) starts a single-node cluster of its own.
   slurmctld slurmd slurm-client munge
 )

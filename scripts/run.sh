@@ -10,7 +10,7 @@ export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"  # cache hits across checkouts
 
 bash scripts/install-deps.sh
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release
-cmake --build build/release --target purkinje
+cmake --build build/release --target purkinje purkinje_python_package
 
 for scene in remote headset; do
   mkdir -p "out/$scene"
@@ -28,3 +28,5 @@ echo "files hold float radiance and AOVs; docs/rendering.md explains them):"
 ls -l out/remote out/headset
 echo
 echo "Labelled sets (docs/datasets.md): out/remote_set, out/headset_set, each with table.csv"
+echo
+echo "Python (docs/python.md): export PYTHONPATH=$PWD/build/release/python, then import purkinje"

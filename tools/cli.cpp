@@ -41,7 +41,9 @@ const CLI::Validator kSeed(
     "SEED");
 
 void refuse(const std::optional<Refusal>& refusal) {
-  if (refusal) throw CommandError(refusal->exit_code, refusal->message);
+  if (refusal) {
+    throw CommandError(refusal->kind == Refusal::Kind::input ? kUsageError : kOutputError, refusal->message);
+  }
 }
 
 void writing(const std::function<void()>& write) {

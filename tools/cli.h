@@ -11,12 +11,18 @@
 #include <stdexcept>
 #include <string>
 
-#include "output_checks.h"
+#include "purkinje/studies/output_checks.h"
 
 namespace purkinje::tools {
 
-// The exit codes, for every command's --help.
+// The command line's exit codes (docs/cli.md), and their text for every
+// command's --help.
+enum ExitCode : int { kOk = 0, kBadInput = 1, kUsageError = 2, kOutputError = 3 };
 extern const char* const kExitCodes;
+
+using studies::Refusal;
+using studies::check_output_file;
+using studies::check_output_folder;
 
 // CLI11's Range lets NaN through (every comparison with it is false), and
 // its unsigned conversion reads "-1" as 2^64 - 1: numbers are checked as

@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "cli.h"
-#include "output_checks.h"
 #include "progress.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"

@@ -39,7 +39,7 @@ std::vector<fs::path> labels_files(const std::vector<std::string>& inputs,
       }
       if (!left_out.empty()) {
         std::sort(left_out.begin(), left_out.end());
-        note(input + ": " + std::to_string(left_out.size()) + " .json files without an image beside them left out (" +
+        if (note) note(input + ": " + std::to_string(left_out.size()) + " .json files without an image beside them left out (" +
              left_out.front() + (left_out.size() > 1 ? ", ..." : "") + ")");
       }
       std::sort(in_folder.begin(), in_folder.end());

@@ -1,9 +1,9 @@
-#include "output_checks.h"
+#include "purkinje/studies/output_checks.h"
 
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
 
-namespace purkinje::tools {
+namespace purkinje::studies {
 
 namespace fs = std::filesystem;
 
@@ -15,12 +15,12 @@ bool same_file(const fs::path& a, const fs::path& b) {
 std::optional<Refusal> check_output_file(const fs::path& file, const std::vector<fs::path>& inputs) {
   for (const fs::path& input : inputs) {
     if (same_file(file, input)) {
-      return Refusal{kUsageError, "-o " + file.string() + ": is an input of this command (" + input.string() +
+      return Refusal{Refusal::Kind::input, "-o " + file.string() + ": is an input of this command (" + input.string() +
                                       "): not overwritten"};
     }
   }
   if (const std::string why = unreplaceable(file); !why.empty()) {
-    return Refusal{kOutputError, "-o " + file.string() + ": " + why};
+    return Refusal{Refusal::Kind::output, "-o " + file.string() + ": " + why};
   }
   return std::nullopt;
 }
@@ -31,11 +31,11 @@ std::optional<Refusal> check_output_folder(const fs::path& folder, const std::ve
   std::error_code ec;
   const fs::file_status status = fs::symlink_status(folder, ec);
   if (fs::exists(status) && !fs::is_directory(fs::status(folder, ec))) {
-    return Refusal{kOutputError, "-o " + folder.string() + ": exists and is not a folder: not replaced"};
+    return Refusal{Refusal::Kind::output, "-o " + folder.string() + ": exists and is not a folder: not replaced"};
   }
   for (const fs::path& input : input_folders) {
     if (same_file(folder, input)) {
-      return Refusal{kUsageError, "-o " + folder.string() + ": is an input folder of this command (" +
+      return Refusal{Refusal::Kind::input, "-o " + folder.string() + ": is an input folder of this command (" +
                                       input.string() + "); write the output to another folder"};
     }
   }
@@ -45,4 +45,4 @@ std::optional<Refusal> check_output_folder(const fs::path& folder, const std::ve
   return std::nullopt;
 }
 
-}  // namespace purkinje::tools
+}  // namespace purkinje::studies

@@ -1,22 +1,24 @@
 #pragma once
-// Checks every command makes of its outputs before any work: an output
-// is never one of the command's inputs, never a device, FIFO or socket
-// (as root, rename() would replace /dev/full with a regular file), and
-// an output folder is never an existing file. A refusal is a message for
-// stderr and an exit code; nothing has been written.
+// Checks every front end (the command line, the Python package) makes of
+// its outputs before any work: an output is never one of its inputs,
+// never a device, FIFO or socket (as root, rename() would replace
+// /dev/full with a regular file), and an output folder is never an
+// existing file. A refusal is a message and its kind; nothing has been
+// written. Messages name the output as the command line's -o.
 
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
-namespace purkinje::tools {
-
-// The command line's exit codes (docs/cli.md).
-enum ExitCode : int { kOk = 0, kBadInput = 1, kUsageError = 2, kOutputError = 3 };
+namespace purkinje::studies {
 
 struct Refusal {
-  int exit_code;        // kUsageError: an output is an input; kOutputError: it cannot be written
+  enum class Kind {
+    input,   // an output is an input (a usage error)
+    output,  // an output cannot be written there
+  };
+  Kind kind;
   std::string message;  // names the option, the path and the rule
 };
 
@@ -36,4 +38,4 @@ std::optional<Refusal> check_output_folder(const std::filesystem::path& folder,
 // Whether two paths name the same existing file or folder.
 bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
-}  // namespace purkinje::tools
+}  // namespace purkinje::studies

@@ -1,0 +1,56 @@
+#pragma once
+// The extension modules' parts (one source file each, to keep each
+// translation unit's pybind11 templates small) and what they share.
+//
+// Two modules: _purkinje (scenes, truth, rendering and detection in
+// memory) and _files (what reads and writes image files and data sets).
+// OpenImageIO, which the files need, loads some 260 shared libraries
+// (0.26 s); _purkinje does without it, so `import purkinje` is quick and
+// _files is imported when a file is first read or written.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <filesystem>
+#include <string>
+
+#include "purkinje/models/geometry.h"
+#include "purkinje/models/rotation.h"
+#include "purkinje/models/scene.h"
+#include "purkinje/renderer/render.h"
+#include "purkinje/trackers/scoring.h"
+
+namespace purkinje::python {
+
+namespace py = pybind11;
+
+// A render and what made it (RenderResult in Python): its files need all three.
+struct Rendered {
+  Scene scene;
+  renderer::RenderOptions options;
+  renderer::RenderResult result;
+};
+
+void bind_errors(py::module_& m);
+void bind_scene(py::module_& m);
+void bind_render(py::module_& m);
+void bind_trackers(py::module_& m);
+
+// What a tracker found, as the package's Python classes take it:
+// (glints, pupils), each a list of tuples (trackers.cpp).
+py::tuple detections_tuple(const trackers::Detections& detections);
+
+// Raises FileNotFoundError with `message` (the library's own, as the
+// command line prints it) when `file` does not exist; else returns.
+void raise_if_missing(const std::filesystem::path& file, const std::string& message);
+
+// Numbers as numpy arrays: a point or vector (3,), a pose (4, 4).
+py::array_t<double> array(const Point3& p);
+py::array_t<double> array(const Vector3& v);
+py::array_t<double> array(const UnitVector3& v);
+py::array_t<double> matrix(const Pose& pose);
+
+// The Python json module's loads(text).
+py::object json_loads(const std::string& text);
+
+}  // namespace purkinje::python

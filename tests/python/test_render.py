@@ -1,0 +1,103 @@
+"""Rendering from Python: the command line's files byte for byte, arrays
+equal to them, the GIL released, errors as ValueError."""
+
+import json
+import threading
+import time
+import zlib
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import purkinje
+from conftest import SOURCE_DIR, cli
+
+
+@pytest.mark.parametrize("name", ["remote", "headset"])
+def test_files_written_from_python_are_the_command_lines_byte_for_byte(name, tmp_path):
+    file = SOURCE_DIR / f"assets/scenes/{name}.json"
+    cli("render", file, "-o", tmp_path / "cli", "--seed", "7", "--samples", "2")
+    scene = purkinje.load_scene(file)
+    result = purkinje.render(scene, 0, seed=7, samples_per_pixel=2)
+    paths = result.write(tmp_path / "py")
+    assert set(paths) == {"image", "exr", "labels"}
+    for kind, path in paths.items():
+        cli_file = tmp_path / "cli" / path.rsplit("/", 1)[1]
+        assert (tmp_path / "py" / cli_file.name).read_bytes() == cli_file.read_bytes(), kind
+
+
+@pytest.mark.parametrize("name", ["remote", "headset"])
+def test_arrays_equal_the_command_lines_png_and_exr(name, tmp_path):
+    file = SOURCE_DIR / f"assets/scenes/{name}.json"
+    cli("render", file, "-o", tmp_path, "--seed", "3")
+    scene = purkinje.load_scene(file)
+    result = purkinje.render(scene, scene.cameras[0].name, seed=3)
+    stem = tmp_path / f"{scene.name}_{scene.cameras[0].name}"
+    png = np.asarray(Image.open(f"{stem}.png"))
+    if result.bits == 8:
+        assert result.image.dtype == np.uint8
+        np.testing.assert_array_equal(result.image, png)
+    else:  # the PNG keeps the sensor's bits in its words' high bits
+        assert result.image.dtype == np.uint16
+        np.testing.assert_array_equal(result.image, png.astype(np.uint16) >> (16 - result.bits))
+    exr = purkinje.read_exr(f"{stem}.exr")
+    np.testing.assert_array_equal(exr["Y"], result.radiance)
+    np.testing.assert_array_equal(exr["electrons"], result.electrons)
+    for aov in result.aov_names:
+        np.testing.assert_array_equal(exr[aov], result.aov(aov))
+    np.testing.assert_array_equal(result.segmentation, result.aov("id").astype(np.uint8))
+    labels = json.loads(open(f"{stem}.json").read())
+    assert result.labels.raw["views"] == labels["views"]
+    assert zlib.crc32(open(f"{stem}.png", "rb").read()) == int(labels["render"]["files"]["image_crc32"], 16)
+
+
+def test_a_render_releases_the_gil(remote_file):
+    scene = purkinje.load_scene(remote_file)
+    done = threading.Event()
+
+    def work():
+        purkinje.render(scene, samples_per_pixel=4, threads=1)
+        done.set()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    ticks = 0
+    while not done.is_set():  # runs only while the render does not hold the GIL
+        ticks += 1
+        time.sleep(0.0005)
+    thread.join()
+    assert ticks > 20
+
+
+def test_arrays_keep_their_render_alive(remote_file):
+    result = purkinje.render(purkinje.load_scene(remote_file), seed=1)
+    radiance = result.radiance
+    total = float(radiance.sum())
+    del result
+    assert float(radiance.sum()) == total
+    assert radiance.base is not None
+
+
+def test_bad_options_raise_value_errors_naming_them(remote_file):
+    scene = purkinje.load_scene(remote_file)
+    with pytest.raises(ValueError, match='camera "cam9": the scene has no camera of that name'):
+        purkinje.render(scene, "cam9")
+    with pytest.raises(ValueError, match="camera index 3"):
+        purkinje.render(scene, 3)
+    with pytest.raises(ValueError, match="samples_per_pixel = 0"):
+        purkinje.render(scene, samples_per_pixel=0)
+    with pytest.raises(ValueError, match='mode = "exact": must be "fast" or "reference"'):
+        purkinje.render(scene, mode="exact")
+    with pytest.raises(KeyError, match='no AOV "albedo"'):
+        purkinje.render(scene, region=(0, 0, 8, 8)).aov("albedo")
+
+
+def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():
+    import subprocess
+    import sys
+
+    code = ("import purkinje, sys\n"
+            "maps = open('/proc/self/maps').read()\n"
+            "sys.exit(1 if 'libOpenImageIO.so' in maps else 0)")
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0

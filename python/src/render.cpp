@@ -6,6 +6,10 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <memory>
+#include <mutex>
+#include <vector>
+
 #include "bindings.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/renderer/render.h"
@@ -53,12 +57,46 @@ const ImagePlane& aov(const Rendered& r, const std::string& name) {
   throw py::key_error("no AOV \"" + name + "\" (this render has: " + names + ")");
 }
 
+// Results Python has let go of, kept for the next renders to reuse their
+// images' memory: fresh memory costs a page fault per 4 KB, a tenth of a
+// remote render (render.h), and a loop over a data set lets each result
+// go before the next. At most two (about 20 MB each for the remote scene).
+class ResultPool {
+ public:
+  std::shared_ptr<Rendered> take() {
+    std::unique_ptr<Rendered> kept;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      if (!free_.empty()) {
+        kept = std::move(free_.back());
+        free_.pop_back();
+      }
+    }
+    if (!kept) kept = std::make_unique<Rendered>();
+    return std::shared_ptr<Rendered>(kept.release(), [this](Rendered* r) { give_back(r); });
+  }
+
+ private:
+  void give_back(Rendered* r) {
+    std::unique_ptr<Rendered> owned(r);
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (free_.size() < 2) free_.push_back(std::move(owned));
+  }
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<Rendered>> free_;
+};
+
+ResultPool& pool() {
+  static ResultPool* p = new ResultPool;  // never destroyed: results may outlive static destruction
+  return *p;
+}
+
 std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, const std::string& mode,
                                  int samples_per_pixel, int edge_samples_per_pixel, std::uint64_t seed, bool noise,
                                  int iris_cache_resolution, std::int64_t reference_photons_per_light,
                                  bool per_light_glint_masks, const std::optional<std::array<int, 4>>& region,
                                  int threads) {
-  auto out = std::make_shared<Rendered>();
+  std::shared_ptr<Rendered> out = pool().take();
   out->scene = scene;
   RenderOptions& o = out->options;
   if (mode == "fast") o.mode = renderer::RenderMode::fast;

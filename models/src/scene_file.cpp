@@ -59,7 +59,7 @@ Rotation read_rotation_matrix(const Value& m) {
   const Vector3 x{rows[0][0], rows[1][0], rows[2][0]}, y{rows[0][1], rows[1][1], rows[2][1]},
       z{rows[0][2], rows[1][2], rows[2][2]};
   try {
-    return Rotation::from_columns(unit_as_given(x), unit_as_given(y), unit_as_given(z));
+    return Rotation::from_columns(UnitVector3::from(x), UnitVector3::from(y), UnitVector3::from(z));
   } catch (const std::invalid_argument&) {
     m.fail("must be a rotation: orthonormal columns, right-handed (determinant +1), within 1e-9");
   }

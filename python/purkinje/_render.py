@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
@@ -56,10 +57,10 @@ RenderResult.labels = property(
     _labels, doc="The image's labels (Labels): the truth with lids, skin and meshes hiding what they hide.")
 
 
-def _write(self: RenderResult, folder: Union[str, os.PathLike], stem: Optional[str] = None) -> Dict[str, str]:
+def _write(self: RenderResult, folder: Union[str, os.PathLike], stem: Optional[str] = None) -> Dict[str, Path]:
     from . import _files  # OpenImageIO: loaded when first needed
 
-    return {kind: str(path) for kind, path in _files.write_render(self, os.fspath(folder), stem).items()}
+    return {kind: Path(path) for kind, path in _files.write_render(self, os.fspath(folder), stem).items()}
 
 
 RenderResult.write = _write

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from typing import Any, Mapping, Optional, Sequence, Union
+from typing import Any, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _purkinje
 from ._purkinje import DatasetSpec, DatasetSpecError, Scene, SceneError
@@ -37,10 +37,10 @@ def _key_path(path: str, key: Union[str, int]) -> str:
     return f"{path}.{key}" if path else key
 
 
-def _non_finite(value: Any, path: str = "") -> Optional[str]:
-    """The key path of the first NaN or infinity in `value`, or None."""
+def _non_finite(value: Any, path: str = "") -> Optional[Tuple[str, float]]:
+    """The key path and value of the first NaN or infinity in `value`, or None."""
     if isinstance(value, float) and not math.isfinite(value):
-        return path
+        return path, value
     if isinstance(value, Mapping):
         items = value.items()
     elif isinstance(value, (list, tuple)):
@@ -58,20 +58,12 @@ def _text(source: Json, name: str, error: type) -> Union[str, bytes]:
     if isinstance(source, (str, bytes)):
         return source
     plain = _plain(source)
-    where = _non_finite(plain)
-    if where is not None:
+    found = _non_finite(plain)
+    if found is not None:
         # JSON has no NaN: said as the reader says a bad number.
-        bad = _value_at(plain, where)
+        where, bad = found
         raise error(f"{name}: {where or '(top level)'} = {bad}: must be a finite number")
     return json.dumps(plain)
-
-
-def _value_at(value: Any, path: str) -> Any:
-    import re
-
-    for part in re.findall(r"[^.\[\]]+|\[\d+\]", path):
-        value = value[int(part[1:-1])] if part.startswith("[") else value[part]
-    return value
 
 
 def parse_scene(source: Json, name: str = "<string>", folder: Union[str, os.PathLike, None] = None) -> Scene:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 from typing import Callable, Dict, Optional, Sequence, Tuple, Union
 
 from ._purkinje import Scene
@@ -27,7 +28,8 @@ def generate(spec: PathLike, output_dir: PathLike, *, count: Optional[int] = Non
     from . import _files
 
     index, shards = shard
-    return _files.generate(os.fspath(spec), os.fspath(output_dir), count, index, shards, resume, threads, progress)
+    outcome = _files.generate(os.fspath(spec), os.fspath(output_dir), count, index, shards, resume, threads, progress)
+    return {k: Path(v) if k in ("table", "manifest") else v for k, v in outcome.items()}
 
 
 def merge(directory: PathLike) -> Dict[str, object]:
@@ -35,7 +37,8 @@ def merge(directory: PathLike) -> Dict[str, object]:
     manifest.json, as `purkinje merge` does."""
     from . import _files
 
-    return _files.merge(os.fspath(directory))
+    outcome = _files.merge(os.fspath(directory))
+    return {k: Path(v) if k in ("table", "manifest") else v for k, v in outcome.items()}
 
 
 def track_set(inputs: Union[PathLike, Sequence[PathLike]], scene: Optional[Scene] = None, *,

@@ -22,9 +22,9 @@ from ._purkinje import RenderResult, Scene
 
 @dataclass
 class Glint:
-    """A glint as a tracker found it: its centre, and what the detector
+    """A glint as a tracker found it: its center, and what the detector
     measured (energy and peak above the background in DN, area, whether
-    saturated, the centre's standard deviation where estimated; 0 where
+    saturated, the center's standard deviation where estimated; 0 where
     not). `illuminator` is the light that made it, -1 when not told."""
 
     u_px: float
@@ -34,18 +34,18 @@ class Glint:
     peak_dn: float = 0.0
     area_px: int = 0
     saturated: bool = False
-    centre_sd_u_px: float = 0.0
-    centre_sd_v_px: float = 0.0
+    center_sd_u_px: float = 0.0
+    center_sd_v_px: float = 0.0
 
     @property
-    def centre_px(self) -> np.ndarray:
+    def center_px(self) -> np.ndarray:
         """(u, v)"""
         return np.array([self.u_px, self.v_px])
 
 
 @dataclass
 class Pupil:
-    """A pupil as a tracker reports it: its centre, and its outline and
+    """A pupil as a tracker reports it: its center, and its outline and
     confidence (0 to 1) when the tracker gives them."""
 
     u_px: float
@@ -54,7 +54,7 @@ class Pupil:
     confidence: Optional[float] = None
 
     @property
-    def centre_px(self) -> np.ndarray:
+    def center_px(self) -> np.ndarray:
         """(u, v)"""
         return np.array([self.u_px, self.v_px])
 
@@ -84,7 +84,8 @@ def _image(image: Union[np.ndarray, RenderResult], bits: Optional[int]) -> tuple
 
 def detect_glints(image: Union[np.ndarray, RenderResult], *, bits: Optional[int] = None, **settings: Any) -> List[Glint]:
     """Glints in a grey image (2D uint8 or uint16; `bits` its significant
-    bits, default 8 or 16; a RenderResult gives its own), brightest first.
+    bits, default 8 or 16: give a 12-bit sensor's RenderResult.image
+    bits=12, or pass the RenderResult, which gives its own), brightest first.
     `settings` are BlobGlintSettings' (docs/trackers.md), e.g. threshold=0.1."""
     pixels, bits = _image(image, bits)
     return [Glint(*g) for g in _purkinje._detect_glints(pixels, bits, settings)]
@@ -110,6 +111,7 @@ class Tracker:
     sensor, and told where its lights put glints on its eye."""
 
     def __init__(self, scene: Optional[Scene] = None, camera: Union[int, str] = 0, eye: int = 0):
+        self._bits: Optional[int] = None
         if scene is None:
             self._tracker = _purkinje._Tracker()
         else:
@@ -119,6 +121,7 @@ class Tracker:
                 raise ValueError(f"Tracker: camera {camera!r}: the scene has no camera of that name "
                                  f"(cameras: {', '.join(names)})")
             self._tracker = _purkinje._Tracker(scene, index, eye)
+            self._bits = scene.cameras[index].sensor.bits if 0 <= index < len(scene.cameras) else None
 
     @property
     def identifies_glints(self) -> bool:
@@ -126,8 +129,12 @@ class Tracker:
         return self._tracker.identifies_glints
 
     def track(self, image: Union[np.ndarray, RenderResult], *, bits: Optional[int] = None) -> Detections:
-        """The glints, brightest first, and the pupil if found."""
+        """The glints, brightest first, and the pupil if found. `bits`
+        defaults to the rig camera's sensor's for a uint16 array (as
+        RenderResult.image holds it: values 0 to 2^bits - 1)."""
         pixels, bits = _image(image, bits)
+        if bits is None and self._bits is not None and np.asarray(pixels).dtype == np.uint16:
+            bits = self._bits
         return _detections(self._tracker.track(pixels, bits))
 
 

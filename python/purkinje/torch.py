@@ -40,7 +40,8 @@ class EyeDataset(Dataset):
     scale (0 to 1; a PNG of more than 8 bits keeps them in its high bits,
     so this holds for every sensor depth); target a dict of tensors:
 
-    - index (int64), and every drawn parameter by name (float64)
+    - index (int64); parameters (float64, one per drawn parameter, in the
+      order of the dataset's `parameters` names; parameter(target, name) picks one)
     - glints_px (lights, 2), glints_ok (lights,): status "ok" (on the
       cornea, in the image, not hidden)
     - pupil_center_px (2,), pupil_ok: the pupil centre seen through the cornea
@@ -91,6 +92,12 @@ class EyeDataset(Dataset):
         self.parameters = list(table.columns[start:end])
         self._parameters = table[self.parameters].astype(np.float64).to_numpy() if self.parameters else None
 
+    def parameter(self, target: Dict[str, Any], name: str) -> Any:
+        """One drawn parameter's values from a target (or a batch's targets)."""
+        if name not in self.parameters:
+            raise KeyError(f"{name!r} is not a drawn parameter of {self.directory} (parameters: {', '.join(self.parameters)})")
+        return target["parameters"][..., self.parameters.index(name)]
+
     def __len__(self) -> int:
         return len(self._images)
 
@@ -104,10 +111,11 @@ class EyeDataset(Dataset):
         pixels = self._read(self._images[i])
         scale = 255.0 if pixels.dtype == np.uint8 else 65535.0
         image = _torch.from_numpy(pixels.astype(np.float32) / np.float32(scale))[None]
+        # Few keys: a batch's collation costs per key (25 scalar keys took a
+        # quarter of the loader's time).
         target: Dict[str, Any] = {"index": _torch.tensor(self._index[i])}
-        if self._parameters is not None:
-            for k, name in enumerate(self.parameters):
-                target[name] = _torch.tensor(self._parameters[i, k])
+        target["parameters"] = _torch.from_numpy(
+            self._parameters[i].copy() if self._parameters is not None else np.zeros(0))
         ok = self._glint_ok[i]
         target["glints_px"] = _torch.from_numpy(np.where(ok[:, None], self._glints[i], 0.0).astype(np.float32))
         target["glints_ok"] = _torch.from_numpy(ok.copy())

@@ -12,9 +12,12 @@
 #include <pybind11/pybind11.h>
 
 #include <filesystem>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "purkinje/models/geometry.h"
+#include "purkinje/models/output_file.h"
 #include "purkinje/models/rotation.h"
 #include "purkinje/models/scene.h"
 #include "purkinje/renderer/render.h"
@@ -41,8 +44,25 @@ void bind_trackers(py::module_& m);
 py::tuple detections_tuple(const trackers::Detections& detections);
 
 // Raises FileNotFoundError with `message` (the library's own, as the
-// command line prints it) when `file` does not exist; else returns.
+// command line prints it) when `file` does not exist; else returns. Needs
+// the GIL.
 void raise_if_missing(const std::filesystem::path& file, const std::string& message);
+
+// Runs a reader of `inputs`: what it throws about them (a std::runtime_error
+// that is no OutputError, with the command line's message) becomes a
+// FileNotFoundError when one of them does not exist, else a ValueError.
+// Called holding the GIL (`read` may release it inside).
+template <class Read>
+auto reading(const std::vector<std::filesystem::path>& inputs, Read read) {
+  try {
+    return read();
+  } catch (const OutputError&) {
+    throw;
+  } catch (const std::runtime_error& error) {
+    for (const std::filesystem::path& input : inputs) raise_if_missing(input, error.what());
+    throw std::invalid_argument(error.what());
+  }
+}
 
 // Numbers as numpy arrays: a point or vector (3,), a pose (4, 4).
 py::array_t<double> array(const Point3& p);

@@ -55,12 +55,15 @@ py::dict generate(const std::filesystem::path& spec_file, const std::filesystem:
   studies::GenerateHooks hooks;
   std::size_t done = 0;
   const std::size_t total = plan.images.size();
-  if (!progress.is_none()) {
-    hooks.image_done = [&] {
-      py::gil_scoped_acquire acquire;
-      progress(++done, total);
-    };
-  }
+  // After each image: the callback, and Ctrl-C (Python sees signals only
+  // when it runs; the GIL is released for the whole set). Either stops the
+  // run between images, each of which is all or nothing.
+  hooks.image_done = [&] {
+    py::gil_scoped_acquire acquire;
+    ++done;
+    if (!progress.is_none()) progress(done, total);
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  };
   studies::GenerateOutcome outcome;
   {
     py::gil_scoped_release release;
@@ -86,10 +89,14 @@ PYBIND11_MODULE(_files, m) {
           const std::string name = stem.value_or(portable_file_name(
               (r.scene.name.empty() ? "scene" : r.scene.name) + "_" +
               r.scene.cameras[static_cast<std::size_t>(r.result.camera)].name()));
+          if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos) {
+            throw std::invalid_argument("write: stem \"" + name + "\": must be a file name, without a folder");
+          }
+          raise_refusal(studies::check_output_folder(folder, {}, {name + ".png", name + ".exr", name + ".json"}, {}));
           renderer::RenderFiles files;
           {
             py::gil_scoped_release release;
-            std::filesystem::create_directories(folder);
+            create_output_folder(folder);
             files = renderer::write_render(folder, name, r.scene, r.result, r.options);
           }
           return files_dict(files);
@@ -98,9 +105,12 @@ PYBIND11_MODULE(_files, m) {
   m.def("read_exr",
         [](const std::filesystem::path& file) {
           std::vector<renderer::NamedPlane> planes;
-          {
+          try {
             py::gil_scoped_release release;
             planes = renderer::read_exr(file);
+          } catch (const OutputError& error) {  // the image reader's, about its input
+            raise_if_missing(file, error.what());
+            throw std::invalid_argument(error.what());
           }
           py::dict out;
           for (renderer::NamedPlane& p : planes) {
@@ -115,11 +125,10 @@ PYBIND11_MODULE(_files, m) {
         py::arg("shard_count"), py::arg("resume"), py::arg("threads"), py::arg("progress"));
   m.def("merge",
         [](const std::filesystem::path& dir) {
-          studies::MergeOutcome outcome;
-          {
+          const studies::MergeOutcome outcome = reading({dir}, [&] {
             py::gil_scoped_release release;
-            outcome = studies::merge_shards(dir);
-          }
+            return studies::merge_shards(dir);
+          });
           py::dict out;
           out["shards"] = outcome.shards;
           out["rows"] = outcome.rows;
@@ -136,12 +145,12 @@ PYBIND11_MODULE(_files, m) {
           trackers::ScoringSettings settings;
           settings.match_radius_px = match_radius_px;
           settings.min_pupil_overlap = min_pupil_overlap;
-          studies::TrackedSet tracked;
-          {
+          const std::vector<std::filesystem::path> paths(inputs.begin(), inputs.end());
+          const studies::TrackedSet tracked = reading(paths, [&] {
             py::gil_scoped_release release;
             const auto images = studies::read_labelled_images(studies::labels_files(inputs, {}));
-            tracked = studies::track_images(images, rig ? &*rig : nullptr, rig_name, settings);
-          }
+            return studies::track_images(images, rig ? &*rig : nullptr, rig_name, settings);
+          });
           py::dict detections;
           for (const auto& [image, found] : tracked.detections) detections[py::str(image)] = detections_tuple(found);
           return py::make_tuple(trackers::score_table(tracked.score), trackers::score_csv(tracked.score),

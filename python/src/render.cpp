@@ -32,6 +32,10 @@ int camera_index(const Scene& scene, const py::object& camera) {
     throw std::invalid_argument("render: camera \"" + name + "\": the scene has no camera of that name (cameras: " +
                                 names + ")");
   }
+  if (!py::isinstance<py::int_>(camera) || py::isinstance<py::bool_>(camera)) {
+    throw py::type_error("render: camera must be a camera's index (int) or name (str), not " +
+                         std::string(py::str(camera.get_type().attr("__name__"))));
+  }
   return camera.cast<int>();  // the renderer checks the range
 }
 
@@ -99,6 +103,7 @@ std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, c
   std::shared_ptr<Rendered> out = pool().take();
   out->scene = scene;
   RenderOptions& o = out->options;
+  o = RenderOptions{};  // a pooled result's options are its last render's (its region too)
   if (mode == "fast") o.mode = renderer::RenderMode::fast;
   else if (mode == "reference") o.mode = renderer::RenderMode::reference;
   else throw std::invalid_argument("render: mode = \"" + mode + "\": must be \"fast\" or \"reference\"");
@@ -110,6 +115,9 @@ std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, c
   o.reference_photons_per_light = reference_photons_per_light;
   o.per_light_glint_masks = per_light_glint_masks;
   if (region) o.region = renderer::PixelRegion{(*region)[0], (*region)[1], (*region)[2], (*region)[3]};
+  if (threads < 0 || threads > 1024) {  // the command line's --threads range
+    throw std::invalid_argument("render: threads = " + std::to_string(threads) + ": must be from 0 (all) to 1024");
+  }
   o.threads = threads;
   const int index = camera_index(scene, camera);
   py::gil_scoped_release release;

@@ -8,6 +8,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
+#include "purkinje/models/check.h"
 #include "purkinje/models/dataset_spec.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/scene_file.h"
@@ -38,7 +39,7 @@ DatasetSpec load_spec_or_raise(const std::filesystem::path& file) {
 // one's status ("ok", "outside_image", "behind_camera"; behind the camera
 // the pixel is 0, 0).
 py::tuple project(const Camera& camera, const py::array_t<double, py::array::c_style | py::array::forcecast>& points) {
-  if (points.ndim() == 0 || points.shape(points.ndim() - 1) != 3) {
+  if (points.ndim() == 0 || points.ndim() > 2 || points.shape(points.ndim() - 1) != 3) {
     throw std::invalid_argument("Camera.project: points must have shape (3,) or (n, 3), not " +
                                 std::string(py::str(points.attr("shape"))));
   }
@@ -48,7 +49,13 @@ py::tuple project(const Camera& camera, const py::array_t<double, py::array::c_s
   auto in = points.data();
   auto out = pixels.mutable_unchecked<2>();
   for (py::ssize_t i = 0; i < n; ++i) {
-    const Projection p = camera.project(Point3{in[3 * i], in[3 * i + 1], in[3 * i + 2]});
+    const Point3 point{in[3 * i], in[3 * i + 1], in[3 * i + 2]};
+    if (!point.is_finite()) {
+      throw std::invalid_argument("Camera.project: points_mm[" + std::to_string(i) + "] = [" +
+                                  check::format_number(point.x) + ", " + check::format_number(point.y) + ", " +
+                                  check::format_number(point.z) + "]: must be finite");
+    }
+    const Projection p = camera.project(point);
     const bool behind = p.status == ProjectionStatus::behind_camera;
     out(i, 0) = behind ? 0.0 : p.pixel.u;
     out(i, 1) = behind ? 0.0 : p.pixel.v;

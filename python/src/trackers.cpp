@@ -6,10 +6,13 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cmath>
 #include <functional>
+#include <type_traits>
 #include <map>
 
 #include "bindings.h"
+#include "purkinje/models/check.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/spelling.h"
 #include "purkinje/studies/tracker.h"
@@ -86,7 +89,14 @@ void apply(Settings& s, const py::dict& keys, const std::string& what,
 
 template <class S, class T>
 std::pair<const std::string, std::function<void(S&, const py::handle&)>> field(const char* name, T S::*member) {
-  return {name, [member](S& s, const py::handle& v) { s.*member = v.cast<T>(); }};
+  return {name, [member, name](S& s, const py::handle& v) {
+            // bool is an int to Python: a flag given for a number is a slip.
+            if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::int_>(v) || (std::is_floating_point_v<T> && py::isinstance<py::float_>(v)))) {
+              throw py::type_error(std::string(name) + " = " + std::string(py::repr(v)) + ": must be " +
+                                   (std::is_floating_point_v<T> ? "a number" : "an int"));
+            }
+            s.*member = v.cast<T>();
+          }};
 }
 
 trackers::BlobGlintSettings glint_settings(const py::dict& keys) {
@@ -114,21 +124,44 @@ trackers::StarburstPupilSettings pupil_settings(const py::dict& keys) {
 }
 
 // Glints cross as (u, v, illuminator, energy_dn, peak_dn, area_px,
-// saturated, centre_sd_u_px, centre_sd_v_px).
+// saturated, center_sd_u_px, center_sd_v_px).
 py::tuple glint_tuple(const Glint& g) {
   return py::make_tuple(g.centre.u, g.centre.v, g.illuminator, g.energy_dn, g.peak_dn, g.area_px, g.saturated,
                         g.centre_sd_u_px, g.centre_sd_v_px);
 }
-Glint glint_from(const py::handle& g) {
+// A field of a detection given from Python, checked as the detections
+// file reader checks its column: `where` names it ("image a.png:
+// glints[0].u_px").
+template <class T>
+T detection_field(const py::handle& object, const char* name, const std::string& where) {
+  try {
+    return object.attr(name).cast<T>();
+  } catch (const py::cast_error&) {
+    throw py::type_error(where + "." + name + " = " + std::string(py::repr(object.attr(name))) + ": must be a " +
+                         (std::is_same_v<T, bool> ? "bool" : std::is_integral_v<T> ? "int" : "number"));
+  }
+}
+
+double finite_field(const py::handle& object, const char* name, const std::string& where) {
+  const double v = detection_field<double>(object, name, where);
+  if (!std::isfinite(v)) throw std::invalid_argument(where + "." + name + " = " + check::format_number(v) + ": must be a finite number");
+  return v;
+}
+
+Glint glint_from(const py::handle& g, const std::string& where) {
   Glint out;
-  out.centre = {g.attr("u_px").cast<double>(), g.attr("v_px").cast<double>()};
-  out.illuminator = g.attr("illuminator").cast<int>();
-  out.energy_dn = g.attr("energy_dn").cast<double>();
-  out.peak_dn = g.attr("peak_dn").cast<double>();
-  out.area_px = g.attr("area_px").cast<int>();
-  out.saturated = g.attr("saturated").cast<bool>();
-  out.centre_sd_u_px = g.attr("centre_sd_u_px").cast<double>();
-  out.centre_sd_v_px = g.attr("centre_sd_v_px").cast<double>();
+  out.centre = {finite_field(g, "u_px", where), finite_field(g, "v_px", where)};
+  out.illuminator = detection_field<int>(g, "illuminator", where);
+  if (out.illuminator < -1) {
+    throw std::invalid_argument(where + ".illuminator = " + std::to_string(out.illuminator) +
+                                ": must be a light's index, an integer from 0 (-1: not told)");
+  }
+  out.energy_dn = finite_field(g, "energy_dn", where);
+  out.peak_dn = finite_field(g, "peak_dn", where);
+  out.area_px = detection_field<int>(g, "area_px", where);
+  out.saturated = detection_field<bool>(g, "saturated", where);
+  out.centre_sd_u_px = finite_field(g, "center_sd_u_px", where);
+  out.centre_sd_v_px = finite_field(g, "center_sd_v_px", where);
   return out;
 }
 
@@ -137,13 +170,19 @@ py::object ellipse_tuple(const std::optional<Ellipse>& e) {
   if (!e) return py::none();
   return py::make_tuple(e->center.u, e->center.v, e->semi_axis_1_px, e->semi_axis_2_px, e->angle_rad / kDegree);
 }
-std::optional<Ellipse> ellipse_from(const py::handle& e) {
+std::optional<Ellipse> ellipse_from(const py::handle& e, const std::string& where) {
   if (e.is_none()) return std::nullopt;
   Ellipse out;
-  out.center = {e.attr("center_u_px").cast<double>(), e.attr("center_v_px").cast<double>()};
-  out.semi_axis_1_px = e.attr("semi_axis_1_px").cast<double>();
-  out.semi_axis_2_px = e.attr("semi_axis_2_px").cast<double>();
-  out.angle_rad = e.attr("angle_deg").cast<double>() * kDegree;
+  out.center = {finite_field(e, "center_u_px", where), finite_field(e, "center_v_px", where)};
+  for (const auto& [name, axis] : {std::pair{"semi_axis_1_px", &out.semi_axis_1_px}, std::pair{"semi_axis_2_px", &out.semi_axis_2_px}}) {
+    *axis = finite_field(e, name, where);
+    if (!(*axis > 0)) throw std::invalid_argument(where + "." + name + " = " + check::format_number(*axis) + ": must be > 0");
+  }
+  const double angle = finite_field(e, "angle_deg", where);
+  if (!(std::abs(angle) <= 360)) {
+    throw std::invalid_argument(where + ".angle_deg = " + check::format_number(angle) + ": must be in [-360, 360] degrees");
+  }
+  out.angle_rad = angle * kDegree;
   return out;
 }
 
@@ -153,15 +192,24 @@ py::tuple pupil_tuple(const trackers::PupilFound& p) {
                         p.confidence ? py::object(py::float_(*p.confidence)) : py::object(py::none()));
 }
 
-Detections detections_from(const py::handle& d) {
+// Detections given from Python for `image`, each field checked as the
+// detections file reader checks it (the same rules, the field named).
+Detections detections_from(const py::handle& d, const std::string& image) {
   Detections out;
-  for (const py::handle g : d.attr("glints")) out.glints.push_back(glint_from(g));
+  const std::string where = "image " + image + ": ";
+  int k = 0;
+  for (const py::handle g : d.attr("glints")) out.glints.push_back(glint_from(g, where + "glints[" + std::to_string(k++) + "]"));
+  k = 0;
   for (const py::handle p : d.attr("pupils")) {
+    const std::string at = where + "pupils[" + std::to_string(k++) + "]";
     trackers::PupilFound found;
-    found.centre = {p.attr("u_px").cast<double>(), p.attr("v_px").cast<double>()};
-    found.ellipse = ellipse_from(p.attr("ellipse"));
-    const py::object confidence = p.attr("confidence");
-    if (!confidence.is_none()) found.confidence = confidence.cast<double>();
+    found.centre = {finite_field(p, "u_px", at), finite_field(p, "v_px", at)};
+    found.ellipse = ellipse_from(p.attr("ellipse"), at + ".ellipse");
+    if (!p.attr("confidence").is_none()) {
+      const double c = detection_field<double>(p, "confidence", at);
+      if (!(c >= 0 && c <= 1)) throw std::invalid_argument(at + ".confidence = " + check::format_number(c) + ": must be in [0, 1], or None");
+      found.confidence = c;
+    }
     out.pupils.push_back(found);
   }
   return out;
@@ -213,7 +261,8 @@ void bind_trackers(py::module_& m) {
           const Image grey = grey_image(image, bits);
           const trackers::StarburstPupilDetector detector(pupil_settings(settings));
           std::vector<Glint> masked;
-          for (const py::handle g : glints) masked.push_back(glint_from(g));
+          int k = 0;
+          for (const py::handle g : glints) masked.push_back(glint_from(g, "detect_pupil: glints[" + std::to_string(k++) + "]"));
           std::optional<trackers::PupilDetection> pupil;
           {
             py::gil_scoped_release release;
@@ -279,7 +328,7 @@ void bind_trackers(py::module_& m) {
            py::arg("match_radius_px"), py::arg("min_pupil_overlap"), py::arg("score_glints"), py::arg("score_pupils"))
       .def("add_render",
            [](ScorerState& s, const std::string& image, const Rendered& r, const py::handle& detections) {
-             s.scorer.add(image, camera_views(r), detections_from(detections));
+             s.scorer.add(image, camera_views(r), detections_from(detections, image));
            })
       .def("add_labels_file",
            [](ScorerState& s, const std::string& image, const std::filesystem::path& file,
@@ -291,7 +340,7 @@ void bind_trackers(py::module_& m) {
                raise_if_missing(file, error.what());
                throw std::invalid_argument(error.what());
              }
-             s.scorer.add(image, labels.views, detections_from(detections));
+             s.scorer.add(image, labels.views, detections_from(detections, image));
            })
       .def("score", [](const ScorerState& s) {
         const trackers::Score score = s.scorer.score();

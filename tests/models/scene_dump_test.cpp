@@ -161,6 +161,11 @@ TEST(SceneDump, RotationMatrixTurnsTheCameraAsItsRotationVectorDoes) {
   EXPECT_EQ(parse_error(camera_scene(R"("rotation_matrix": [[1, 0, 0], [0, 1, 0], [0, 0, -1]])")),
             "scene.json: cameras[0].rotation_matrix = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]: must be a rotation: "
             "orthonormal columns, right-handed (determinant +1), within 1e-9");
+  // Columns of other lengths are no rotation, not a rotation to normalize.
+  EXPECT_NE(parse_error(camera_scene(R"("rotation_matrix": [[1, 0, 0], [0, 5, 0], [0, 0, 1]])")).find("must be a rotation"),
+            std::string::npos);
+  EXPECT_NE(parse_error(camera_scene(R"("rotation_matrix": [[0.5, 0, 0], [0, 0.5, 0], [0, 0, 0.5]])")).find("must be a rotation"),
+            std::string::npos);
   EXPECT_EQ(parse_error(camera_scene(R"("rotation_matrix": [[1, 0, 0], [0, 1, 0]])")),
             "scene.json: cameras[0].rotation_matrix = [[1, 0, 0], [0, 1, 0]]: must be a 3 x 3 rotation matrix, "
             "rows [[r00, r01, r02], [r10, r11, r12], [r20, r21, r22]]");

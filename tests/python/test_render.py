@@ -23,7 +23,8 @@ def test_files_written_from_python_are_the_command_lines_byte_for_byte(name, tmp
     paths = result.write(tmp_path / "py")
     assert set(paths) == {"image", "exr", "labels"}
     for kind, path in paths.items():
-        cli_file = tmp_path / "cli" / path.rsplit("/", 1)[1]
+        assert path.parent == tmp_path / "py"
+        cli_file = tmp_path / "cli" / path.name
         assert (tmp_path / "py" / cli_file.name).read_bytes() == cli_file.read_bytes(), kind
 
 
@@ -71,12 +72,23 @@ def test_a_render_releases_the_gil(remote_file):
 
 
 def test_arrays_keep_their_render_alive(remote_file):
-    result = purkinje.render(purkinje.load_scene(remote_file), seed=1)
-    radiance = result.radiance
-    total = float(radiance.sum())
+    scene = purkinje.load_scene(remote_file)
+    result = purkinje.render(scene, seed=1)
+    radiance, image = result.radiance, result.image
+    total, image_sum = float(radiance.sum()), int(image.sum())
     del result
-    assert float(radiance.sum()) == total
-    assert radiance.base is not None
+    for seed in (2, 3, 4):  # renders that would reuse the memory were it let go
+        purkinje.render(scene, seed=seed, samples_per_pixel=2)
+    assert float(radiance.sum()) == total and int(image.sum()) == image_sum
+
+
+def test_a_render_takes_no_option_from_an_earlier_one(remote_file):
+    scene = purkinje.load_scene(remote_file)
+    whole = purkinje.render(scene, seed=1).radiance.copy()
+    patch = purkinje.render(scene, seed=1, region=(0, 0, 8, 8))
+    assert not patch.radiance[8:, 8:].any()
+    del patch  # its memory may serve the next render
+    np.testing.assert_array_equal(purkinje.render(scene, seed=1).radiance, whole)
 
 
 def test_bad_options_raise_value_errors_naming_them(remote_file):
@@ -91,6 +103,25 @@ def test_bad_options_raise_value_errors_naming_them(remote_file):
         purkinje.render(scene, mode="exact")
     with pytest.raises(KeyError, match='no AOV "albedo"'):
         purkinje.render(scene, region=(0, 0, 8, 8)).aov("albedo")
+    with pytest.raises(TypeError, match="camera must be a camera's index .int. or name .str., not float"):
+        purkinje.render(scene, 1.5)
+    with pytest.raises(ValueError, match="threads = 2000: must be from 0 .all. to 1024"):
+        purkinje.render(scene, threads=2000)
+
+
+def test_files_are_refused_as_the_command_line_refuses_them(remote_file, tmp_path):
+    result = purkinje.render(purkinje.load_scene(remote_file), region=(0, 0, 8, 8))
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(purkinje.OutputError, match="exists and is not a folder: not replaced"):
+        result.write(tmp_path / "file")
+    for stem in ("../escaped", "", ".."):
+        with pytest.raises(ValueError, match="must be a file name, without a folder"):
+            result.write(tmp_path / "out", stem=stem)
+    assert not (tmp_path / "out").exists() and not (tmp_path / "escaped.png").exists()
+    with pytest.raises(FileNotFoundError, match="no_such.exr"):
+        purkinje.read_exr(tmp_path / "no_such.exr")
+    with pytest.raises(ValueError):
+        purkinje.read_exr(tmp_path / "file")
 
 
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():

@@ -48,6 +48,10 @@ def test_camera_project_agrees_with_the_pinhole_formula(remote_file):
     assert one_status == "ok"
     with pytest.raises(ValueError, match=r"points must have shape \(3,\) or \(n, 3\)"):
         camera.project(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match=r"points must have shape"):
+        camera.project(np.zeros((2, 2, 3)))
+    with pytest.raises(ValueError, match=r"points_mm\[1\] = \[0, nan, 600\]: must be finite"):
+        camera.project([[0, 0, 600], [0, np.nan, 600]])
 
 
 @pytest.mark.parametrize("name", SCENES)
@@ -74,6 +78,12 @@ def test_a_changed_dict_gives_a_changed_scene_checked_as_a_file(remote_file):
     d["eyes"][0]["pupil"]["radius_mm"] = float("nan")
     with pytest.raises(purkinje.SceneError, match=r"^mine.json: eyes\[0\].pupil.radius_mm = nan: must be a finite number$"):
         purkinje.parse_scene(d, name="mine.json")
+    # A name with a dot in it is a key, not a path.
+    d["eyes"][0]["pupil"]["radius_mm"] = 2.0
+    d["illuminators"][0]["note.v2"] = float("inf")
+    with pytest.raises(purkinje.SceneError, match=r"^mine.json: illuminators\[0\].note.v2 = inf: must be a finite number$"):
+        purkinje.parse_scene(d, name="mine.json")
+    del d["illuminators"][0]["note.v2"]
     # numpy values are taken as numbers.
     d["eyes"][0]["pupil"]["radius_mm"] = np.float32(2.5)
     d["illuminators"][0]["position_mm"] = np.array([-120.0, 0.0, 0.0])

@@ -57,6 +57,34 @@ def test_generate_refuses_as_the_command_line_does(tmp_path):
     assert str(error.value) == cli_error("generate", bad, "-o", tmp_path / "out")
 
 
+def test_reading_errors_are_python_exceptions_with_the_command_lines_messages(tmp_path):
+    with pytest.raises(FileNotFoundError) as error:
+        purkinje.merge(tmp_path / "nowhere")
+    assert str(error.value) == cli_error("merge", tmp_path / "nowhere")
+    with pytest.raises(ValueError) as error:
+        purkinje.merge(tmp_path)
+    assert str(error.value) == cli_error("merge", tmp_path)
+    with pytest.raises(FileNotFoundError):
+        purkinje.track_set(tmp_path / "nowhere")
+    with pytest.raises(ValueError) as error:
+        purkinje.track_set(tmp_path)
+    assert str(error.value) == cli_error("track", tmp_path, "-o", tmp_path / "out")
+
+
+def test_ctrl_c_stops_a_run_between_images(tmp_path):
+    import signal
+
+    def interrupt(done, total):
+        if done == 1:
+            signal.raise_signal(signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        purkinje.generate(SPEC, tmp_path, count=3, threads=1, progress=interrupt)
+    assert len(list(tmp_path.glob("*.json"))) == 1  # the first image whole, nothing after it
+    assert not (tmp_path / "table.csv").exists()
+    assert purkinje.generate(SPEC, tmp_path, count=3, resume=True)["resumed"] == 1
+
+
 @pytest.fixture(scope="module")
 def small_set(tmp_path_factory):
     folder = tmp_path_factory.mktemp("set")
@@ -91,7 +119,8 @@ def test_the_torch_dataset_serves_images_and_labels_through_workers(small_set):
     png = np.asarray(Image.open(small_set / table["image"][2]))
     np.testing.assert_array_equal(image[0].numpy(), png.astype(np.float32) / np.float32(255))
     assert target["index"] == 2
-    assert target["pupil_radius_mm"] == table["pupil_radius_mm"][2]
+    assert dataset.parameter(target, "pupil_radius_mm") == table["pupil_radius_mm"][2]
+    assert target["parameters"].tolist() == table.loc[2, dataset.parameters].astype(float).tolist()
     for k, light in enumerate(dataset.lights):
         ok = table[f"glint.{light}.status"][2] == "ok"
         assert bool(target["glints_ok"][k]) == ok
@@ -106,9 +135,28 @@ def test_the_torch_dataset_serves_images_and_labels_through_workers(small_set):
         assert images.shape[1:] == (1, 480, 640) and images.dtype == torch.float32
         assert not torch.isnan(targets["glints_px"]).any() and not torch.isnan(targets["pupil_ellipse"]).any()
         seen += targets["index"].tolist()
+        assert dataset.parameter(targets, "pupil_radius_mm").tolist() == \
+            table["pupil_radius_mm"][targets["index"].numpy()].tolist()
     assert seen == list(range(6))
     with pytest.raises(ValueError, match="camera 'cam7' is not in the set"):
         purkinje.torch.EyeDataset(small_set, camera="cam7")
+
+
+def test_the_torch_dataset_scales_deeper_sensors_by_their_png(tmp_path):
+    import purkinje.torch
+    from PIL import Image
+
+    spec = tmp_path / "deep.json"
+    spec.write_text(json.dumps({"dataset_format": 1, "name": "deep", "count": 2,
+                                "scene": str(SOURCE_DIR / "assets/scenes/headset.json"),
+                                "parameters": {"bits": {"choice": [10, 12]}}}))
+    purkinje.generate(spec, tmp_path, count=2, threads=1)
+    dataset = purkinje.torch.EyeDataset(tmp_path)
+    image, target = dataset[1]
+    png = np.asarray(Image.open(tmp_path / purkinje.data.load_table(tmp_path)["image"][1]))
+    assert png.max() > 255  # 16-bit: the sensor's bits in the words' high bits (PIL reads them as int32)
+    np.testing.assert_array_equal(image[0].numpy(), png.astype(np.float32) / np.float32(65535))
+    assert 0 < float(image.max()) <= 1
 
 
 def test_track_set_is_purkinje_track(small_set, tmp_path):

@@ -59,9 +59,9 @@ def test_detectors_on_a_render_find_its_labels(remote_file):
     glints = purkinje.detect_glints(result)
     assert len(glints) == 2
     for glint in glints:
-        assert min(np.linalg.norm(glint.centre_px - g.pixel_px) for g in view.glints) < 0.1
+        assert min(np.linalg.norm(glint.center_px - g.pixel_px) for g in view.glints) < 0.1
     pupil = purkinje.detect_pupil(result, glints)
-    assert np.linalg.norm(pupil.centre_px - view.pupil.ellipse.center_px) < 0.5
+    assert np.linalg.norm(pupil.center_px - view.pupil.ellipse.center_px) < 0.5
     assert 0 < pupil.confidence <= 1
     # A strided view (every other row and column) is read as it is.
     half = purkinje.detect_glints(result.image[::2, ::2])
@@ -83,6 +83,34 @@ def test_user_detections_are_scored_alike(remote_file):
     assert summary["glints"]["identity_rate"] == 1.0
 
 
+def test_user_detections_are_checked_as_a_detections_file_is(remote_file):
+    result = purkinje.render(purkinje.load_scene(remote_file), region=(0, 0, 8, 8))
+    scorer = purkinje.Scorer()
+    with pytest.raises(ValueError, match=r"^image a.png: glints\[1\].u_px = inf: must be a finite number$"):
+        scorer.add("a.png", result, purkinje.Detections(glints=[purkinje.Glint(1, 2), purkinje.Glint(float("inf"), 3)]))
+    with pytest.raises(TypeError, match=r"pupils\[0\].u_px = None: must be a number"):
+        scorer.add("a.png", result, purkinje.Detections(pupils=[purkinje.Pupil(None, 3)]))
+    bad_ellipse = purkinje.Ellipse(1, 2, -5, 3, 0)
+    with pytest.raises(ValueError, match=r"pupils\[0\].ellipse.semi_axis_1_px = -5: must be > 0"):
+        scorer.add("a.png", result, purkinje.Detections(pupils=[purkinje.Pupil(1, 2, bad_ellipse)]))
+    with pytest.raises(ValueError, match=r"pupils\[0\].confidence = 1.5: must be in \[0, 1\], or None"):
+        scorer.add("a.png", result, purkinje.Detections(pupils=[purkinje.Pupil(1, 2, None, 1.5)]))
+    assert scorer.score().summary["images"] == 0  # nothing half added
+
+
+def test_a_rig_tracker_reads_its_cameras_bits(source_dir):
+    headset = purkinje.load_scene(source_dir / "assets/scenes/headset.json")
+    d = headset.to_dict()
+    d["cameras"][0]["sensor"]["bits"] = 12
+    scene = purkinje.parse_scene(d)
+    result = purkinje.render(scene, seed=3)
+    assert result.image.dtype == np.uint16 and result.image.max() > 255
+    tracker = purkinje.Tracker(scene)
+    from_array = tracker.track(result.image)
+    assert len(from_array.glints) > 0
+    assert [g.center_px.tolist() for g in from_array.glints] == [g.center_px.tolist() for g in tracker.track(result).glints]
+
+
 def test_bad_images_and_settings_are_named():
     with pytest.raises(ValueError, match=r"must be a 2D uint8 or uint16 array \(height, width\), not float64"):
         purkinje.detect_glints(np.zeros((4, 4)))
@@ -92,5 +120,7 @@ def test_bad_images_and_settings_are_named():
         purkinje.detect_glints(np.zeros((4, 4), np.uint8), thresold=0.1)
     with pytest.raises(ValueError, match="threshold"):
         purkinje.detect_glints(np.zeros((8, 8), np.uint8), threshold=-1)
+    with pytest.raises(TypeError, match="threshold = 'abc': must be a number"):
+        purkinje.detect_glints(np.zeros((8, 8), np.uint8), threshold="abc")
     with pytest.raises(ValueError, match="rays"):
         purkinje.detect_pupil(np.zeros((8, 8), np.uint8), rays=3)

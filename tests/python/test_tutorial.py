@@ -24,6 +24,7 @@ def test_the_tutorial_has_code():
 def test_every_block_of_the_tutorial_runs(tmp_path):
     (tmp_path / "assets").symlink_to(SOURCE_DIR / "assets")
     namespace = {"__name__": "tutorial"}
+    printed = []
     cwd = os.getcwd()
     os.chdir(tmp_path)
     try:
@@ -35,9 +36,13 @@ def test_every_block_of_the_tutorial_runs(tmp_path):
                 except Exception as error:
                     pytest.fail(f"block {i + 1} raised {error!r}:\n{block}")
             assert output.getvalue(), f"block {i + 1} printed nothing"
+            printed.append(output.getvalue())
     finally:
         os.chdir(cwd)
     # What the comments promise.
+    text = "".join(printed)
+    assert "spherical: eyes[0].cornea.asphericity = -3: must be >= -1" in text
+    assert "assets/scenes/no_such_scene.json: cannot read: no such file" in text
     assert namespace["image"].dtype.name == "uint8"
     assert (tmp_path / "out/python/remote_cam0.png").is_file()
     assert len(namespace["table"]) == 8

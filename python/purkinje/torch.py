@@ -38,7 +38,9 @@ class EyeDataset(Dataset):
     rows) with their labels. Items are (image, target): the image a
     float32 tensor (1, H, W), the sensor's digital numbers over its full
     scale (0 to 1; a PNG of more than 8 bits keeps them in its high bits,
-    so this holds for every sensor depth); target a dict of tensors:
+    so this holds for every sensor depth), or with as_float=False the
+    PNG's own values (uint8, or int32 holding 16-bit words), a quarter of
+    the bytes to move between processes; target a dict of tensors:
 
     - index (int64); parameters (float64, one per drawn parameter, in the
       order of the dataset's `parameters` names; parameter(target, name) picks one)
@@ -57,7 +59,7 @@ class EyeDataset(Dataset):
 
     def __init__(self, directory: Union[str, os.PathLike], transform: Optional[Callable] = None,
                  target_transform: Optional[Callable] = None, *, camera: Optional[str] = None,
-                 segmentation: bool = False):
+                 segmentation: bool = False, as_float: bool = True):
         self.directory = Path(directory)
         table = load_table(self.directory)
         if camera is not None:
@@ -69,6 +71,7 @@ class EyeDataset(Dataset):
             raise ValueError(f"{self.directory}: the set has no sensor images (its spec's outputs.image is false)")
         if segmentation and "segmentation" not in table.columns:
             raise ValueError(f"{self.directory}: the set has no segmentation images (outputs.segmentation)")
+        self.as_float = as_float
         self.transform = transform
         self.target_transform = target_transform
         # Plain arrays, not the DataFrame: quick to index, cheap to send to workers.
@@ -103,14 +106,17 @@ class EyeDataset(Dataset):
 
     def _read(self, name: str) -> np.ndarray:
         with Image.open(self.directory / name) as image:
-            return np.asarray(image)
+            return np.array(image)  # writable, as torch wants its arrays
 
     def __getitem__(self, i: int) -> Tuple[Any, Dict[str, Any]]:
         if not -len(self) <= i < len(self):
             raise IndexError(f"EyeDataset index {i} out of range ({len(self)} images)")
         pixels = self._read(self._images[i])
-        scale = 255.0 if pixels.dtype == np.uint8 else 65535.0
-        image = _torch.from_numpy(pixels.astype(np.float32) / np.float32(scale))[None]
+        if self.as_float:
+            scale = 255.0 if pixels.dtype == np.uint8 else 65535.0
+            image = _torch.from_numpy(pixels.astype(np.float32) / np.float32(scale))[None]
+        else:
+            image = _torch.from_numpy(pixels.astype(np.int32) if pixels.dtype != np.uint8 else pixels)[None]
         # Few keys: a batch's collation costs per key (25 scalar keys took a
         # quarter of the loader's time).
         target: Dict[str, Any] = {"index": _torch.tensor(self._index[i])}

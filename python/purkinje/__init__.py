@@ -34,6 +34,7 @@ from ._purkinje import (
     load_dataset_spec,
     load_scene,
 )
+from ._calibration import CalibrationStudy, GazePanel, calibrate
 from ._labels import (
     Ellipse,
     EyeLabel,
@@ -63,6 +64,8 @@ from ._trackers import Detections, Glint, Pupil, Score, Scorer, Tracker, detect_
 __all__ = [
     "__version__",
     "build_scene",
+    "calibrate",
+    "CalibrationStudy",
     "Camera",
     "camera",
     "DatasetSpec",
@@ -76,6 +79,7 @@ __all__ = [
     "eye_model_presets",
     "EyeLabel",
     "EyeModel",
+    "GazePanel",
     "generate",
     "Glint",
     "GlintLabel",

@@ -38,6 +38,7 @@ void bind_errors(py::module_& m);
 void bind_scene(py::module_& m);
 void bind_render(py::module_& m);
 void bind_trackers(py::module_& m);
+void bind_studies(py::module_& m);
 
 // What a tracker found, as the package's Python classes take it:
 // (glints, pupils), each a list of tuples (trackers.cpp).

@@ -12,4 +12,5 @@ PYBIND11_MODULE(_purkinje, m) {
   python::bind_scene(m);
   python::bind_render(m);
   python::bind_trackers(m);
+  python::bind_studies(m);
 }

@@ -422,6 +422,28 @@ void score_position(const Scene& rig, const std::vector<Frame>& tests, std::size
 }  // namespace
 
 void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings) {
+  // The settings' ranges (the command line's options check them too, as text).
+  const auto within = [](const char* name, double value, double low, double high) {
+    if (!(value >= low && value <= high)) {
+      throw std::invalid_argument(std::string("calibration: ") + name + " = " + format(value) + ": must be from " +
+                                  format(low) + " to " + format(high));
+    }
+  };
+  within("grid", settings.grid, 1, 64);
+  within("calibration_grid", settings.calibration_grid, 3, 16);
+  within("noise_frames", settings.noise_frames, 0, 10000);
+  if (settings.glint_noise_px) within("glint_noise_px", *settings.glint_noise_px, 1e-6, 10);
+  if (settings.pupil_noise_px) within("pupil_noise_px", *settings.pupil_noise_px, 1e-6, 10);
+  for (const auto& move : settings.head_moves) {
+    for (const double v : move) within("head_moves", v, -1e6, 1e6);
+  }
+  if (const auto& c = settings.tracker_cornea) {
+    if (!((*c)[0] > 0 && (*c)[0] < 100) || !((*c)[1] > -1 && (*c)[1] < 10)) {
+      throw std::invalid_argument("calibration: tracker_cornea = (" + format((*c)[0]) + ", " + format((*c)[1]) +
+                                  "): must be (R, Q) with the apex radius R in (0, 100) mm and the asphericity Q "
+                                  "in (-1, 10)");
+    }
+  }
   if (!rig.screen) {
     throw std::runtime_error(rig_file + ": no \"screen\" block: calibration needs the screen the eye "
                              "looks at (docs/scene-format.md)");

@@ -126,6 +126,9 @@ def test_the_torch_dataset_serves_images_and_labels_through_workers(small_set):
         assert bool(target["glints_ok"][k]) == ok
         if ok:
             assert target["glints_px"][k, 0] == np.float32(table[f"glint.{light}.u_px"][2])
+    raw, _ = purkinje.torch.EyeDataset(small_set, as_float=False)[2]
+    assert raw.dtype == torch.uint8
+    np.testing.assert_array_equal(raw[0].numpy(), png)
     classes = np.asarray(Image.open(small_set / table["segmentation"][2]))
     np.testing.assert_array_equal(target["segmentation"].numpy(), classes)
 

@@ -39,9 +39,11 @@ struct CalibrationSettings {
   std::uint64_t seed = 1;  // of the first frame's render; each next frame the next
 };
 
-// Throws std::runtime_error, naming `rig_file`, for a rig the study cannot
-// calibrate: no screen, fewer than two lights, other than one eye, or (with
-// no tracker cornea given) an eye whose cornea is no ellipsoid.
+// Throws std::invalid_argument for settings out of their ranges (naming
+// the setting, its value and the range), and std::runtime_error, naming
+// `rig_file`, for a rig the study cannot calibrate: no screen, fewer than
+// two lights, other than one eye, or (with no tracker cornea given) an eye
+// whose cornea is no ellipsoid.
 void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings);
 
 // How many frames run_calibration renders (for progress).

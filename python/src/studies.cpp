@@ -1,0 +1,65 @@
+// The calibration study from Python: the rig's eye fixates targets, each
+// frame rendered and read by purkinje's tracker, both gaze methods
+// calibrated and scored (docs/calibration.md). Frames are rendered in
+// memory: no image file library is needed.
+
+#include <pybind11/stl.h>
+
+#include "bindings.h"
+#include "purkinje/studies/calibration.h"
+
+namespace purkinje::python {
+
+void bind_studies(py::module_& m) {
+  m.def("_calibrate",
+        [](const Scene& rig, int grid, int calibration_grid, const std::vector<std::array<double, 3>>& head_moves,
+           const std::optional<std::array<double, 2>>& tracker_cornea, bool fit_radius, bool fit_pupil_depth,
+           std::optional<double> glint_noise_px, std::optional<double> pupil_noise_px, int noise_frames,
+           std::uint64_t seed, const py::object& progress) {
+          studies::CalibrationSettings settings;
+          settings.grid = grid;
+          settings.calibration_grid = calibration_grid;
+          settings.head_moves = head_moves;
+          settings.tracker_cornea = tracker_cornea;
+          settings.fit_radius = fit_radius;
+          settings.fit_pupil_depth = fit_pupil_depth;
+          settings.glint_noise_px = glint_noise_px;
+          settings.pupil_noise_px = pupil_noise_px;
+          settings.noise_frames = noise_frames;
+          settings.seed = seed;
+          reading({}, [&] { studies::check_calibration_rig(rig, rig.name, settings); });
+          const std::size_t total = studies::calibration_frames(settings);
+          std::size_t done = 0;
+          // After each frame: the callback, and Ctrl-C (the GIL is released meanwhile).
+          const auto step = [&] {
+            py::gil_scoped_acquire acquire;
+            ++done;
+            if (!progress.is_none()) progress(done, total);
+            if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+          };
+          const studies::CalibrationStudy study = [&] {
+            py::gil_scoped_release release;
+            return studies::run_calibration(rig, settings, step);
+          }();
+          py::list panels;
+          for (const trackers::GazeMapPanel& panel : study.panels) {
+            py::list targets, estimates;
+            for (const ScreenPoint& t : panel.targets) targets.append(py::make_tuple(t.x_mm, t.y_mm));
+            for (const auto& method : panel.estimates) {
+              py::list points;
+              for (const auto& e : method) {
+                points.append(e ? py::object(py::make_tuple(e->x_mm, e->y_mm)) : py::object(py::none()));
+              }
+              estimates.append(points);
+            }
+            panels.append(py::make_tuple(panel.title, targets, estimates));
+          }
+          return py::make_tuple(studies::simulation_json(study.runs), studies::simulation_text(study.runs),
+                                study.frames_csv, panels);
+        },
+        py::arg("rig"), py::arg("grid"), py::arg("calibration_grid"), py::arg("head_moves"), py::arg("tracker_cornea"),
+        py::arg("fit_radius"), py::arg("fit_pupil_depth"), py::arg("glint_noise_px"), py::arg("pupil_noise_px"),
+        py::arg("noise_frames"), py::arg("seed"), py::arg("progress"));
+}
+
+}  // namespace purkinje::python

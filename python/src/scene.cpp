@@ -250,6 +250,12 @@ void bind_scene(py::module_& m) {
         "SceneError (a ValueError) with the command line's message.");
   m.def("_parse_scene_text", &parse_scene, py::arg("text"), py::arg("source"), py::arg("folder"));
   m.def("eye_model_presets", &eye_model_preset_names, "The eye model presets' names.");
+  m.def("eye_model",
+        [](const std::string& name) {
+          if (auto model = eye_model_preset(name)) return *model;
+          throw std::invalid_argument("eye_model: \"" + name + "\": unknown eye model (valid: keratometric, le_grand, navarro)");
+        },
+        py::arg("name"), "A preset's anatomy (docs/eye-models.md): \"keratometric\", \"le_grand\" or \"navarro\".");
   m.def("_truth_text",
         [](const Scene& scene, int pupil_border_points, const std::string& format) {
           // The command line's --pupil-points range.

@@ -166,5 +166,11 @@ def test_a_dataset_spec_draws_and_builds_its_images_scenes():
     assert str(error.value).startswith("spec.json: count = 0: ")
 
 
-def test_presets_are_listed():
+def test_presets_are_listed_with_their_anatomy():
     assert purkinje.eye_model_presets() == ["keratometric", "le_grand", "navarro"]
+    navarro = purkinje.eye_model("navarro")  # docs/eye-models.md: Navarro 1985
+    assert (navarro.cornea_radius_mm, navarro.cornea_asphericity) == (7.72, -0.26)
+    assert navarro.posterior_cornea["radius_mm"] == 6.5
+    assert purkinje.eye_model("keratometric").posterior_cornea is None
+    with pytest.raises(ValueError, match='"nav": unknown eye model'):
+        purkinje.eye_model("nav")

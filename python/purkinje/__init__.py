@@ -35,7 +35,7 @@ from ._purkinje import (
     load_dataset_spec,
     load_scene,
 )
-from ._calibration import CalibrationStudy, GazePanel, calibrate
+from ._calibration import CalibrationStudy, GazePanel, calibrate, displacement_field
 from ._labels import (
     Ellipse,
     EyeLabel,
@@ -74,6 +74,7 @@ __all__ = [
     "detect_glints",
     "detect_pupil",
     "Detections",
+    "displacement_field",
     "Ellipse",
     "Eye",
     "eye",

@@ -7,10 +7,23 @@
 
 #include "bindings.h"
 #include "purkinje/studies/calibration.h"
+#include "purkinje/studies/compare.h"
 
 namespace purkinje::python {
 
 void bind_studies(py::module_& m) {
+  m.def("_displacement_csv",
+        [](const Scene& world, const Scene& assumed, int grid, double cap_deg, int camera, int pupil_border_points) {
+          studies::CompareSettings settings;
+          settings.grid = grid;
+          settings.cap_deg = cap_deg;
+          settings.camera = camera;
+          settings.pupil_border_points = pupil_border_points;
+          py::gil_scoped_release release;
+          return studies::displacement_csv(studies::displacement_field(world, assumed, settings));
+        },
+        py::arg("world"), py::arg("assumed"), py::arg("grid"), py::arg("cap_deg"), py::arg("camera"),
+        py::arg("pupil_border_points"));
   m.def("_calibrate",
         [](const Scene& rig, int grid, int calibration_grid, const std::vector<std::array<double, 3>>& head_moves,
            const std::optional<std::array<double, 2>>& tracker_cornea, bool fit_radius, bool fit_pupil_depth,

@@ -44,3 +44,18 @@ def test_a_rig_it_cannot_calibrate_is_refused_with_the_command_lines_message(tmp
         purkinje.calibrate(scene, grid=70)
     with pytest.raises(ValueError, match=r"tracker_cornea = \(7.8, -2\): must be"):
         purkinje.calibrate(scene, tracker_cornea=(7.8, -2))
+
+
+def test_displacement_field_is_zero_for_one_model_and_names_what_moves(remote_file):
+    scene = purkinje.load_scene(remote_file)
+    same = purkinje.displacement_field(scene, scene, grid=3)
+    assert len(same) == 9 * 4 and (same["du_px"].dropna() == 0).all() and same["du_px"].notna().sum() >= 9 * 3
+    d = scene.to_dict()
+    d["eyes"][0]["cornea"]["asphericity"] = 0.0  # the tracker's classic sphere against Navarro's Q = -0.26
+    sphere = purkinje.parse_scene(d)
+    field = purkinje.displacement_field(scene, sphere, grid=3)
+    glints = field[field.feature.str.startswith("glint.")]
+    assert glints["displacement_px"].max() > 0.01
+    assert set(field.feature) == {"glint.led_left", "glint.led_right", "pupil_center", "pupil_ellipse"}
+    with pytest.raises(ValueError, match="compare: grid = 0"):
+        purkinje.displacement_field(scene, sphere, grid=0)

@@ -1,0 +1,201 @@
+// The compare study's displacement field: zero for identical versions,
+// and, for small changes, what a closed form and the solvers called
+// directly say.
+
+#include "purkinje/studies/compare.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "purkinje/models/scene_file.h"
+#include "purkinje/models/specular.h"
+#include "purkinje/models/truth.h"
+
+namespace purkinje::studies {
+namespace {
+
+const std::string kSourceDir = PURKINJE_SOURCE_DIR;
+
+Scene bundled(const std::string& name) { return load_scene(kSourceDir + "/assets/scenes/" + name + ".json"); }
+
+// The scene with its eye's model changed by `change`, its centre of
+// rotation and optical axis kept.
+template <class Change>
+Scene with_model(const Scene& scene, Change change) {
+  Scene out = scene;
+  const Eye& eye = scene.eyes.front();
+  EyeModel model = eye.model();
+  change(model);
+  Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
+  changed.set_appearance(eye.appearance());
+  out.eyes = {changed};
+  return out;
+}
+
+TEST(CompareField, IdenticalVersionsDisplaceNothing) {
+  for (const char* name : {"remote", "headset"}) {
+    for (const bool screen : {true, false}) {
+      Scene scene = bundled(name);
+      if (!screen) scene.screen.reset();
+      CompareSettings settings;
+      settings.grid = 3;
+      const DisplacementField field = displacement_field(scene, scene, settings);
+      EXPECT_EQ(field.on_screen, screen);
+      ASSERT_EQ(field.points.size(), 9u);
+      int compared = 0;
+      for (const FieldPoint& p : field.points) {
+        ASSERT_EQ(p.features.size(), scene.illuminators.size() + 2);
+        for (const FeaturePair& f : p.features) {
+          EXPECT_EQ(f.world_status, f.assumed_status) << name << " " << f.feature;
+          if (const auto d = f.displacement()) {
+            EXPECT_EQ(d->u, 0.0) << name << " " << f.feature;
+            EXPECT_EQ(d->v, 0.0) << name << " " << f.feature;
+            ++compared;
+          }
+          if (f.world_ellipse) {
+            EXPECT_EQ(f.world_ellipse->semi_axis_1_px, f.assumed_ellipse->semi_axis_1_px);
+            EXPECT_EQ(f.world_ellipse->semi_axis_2_px, f.assumed_ellipse->semi_axis_2_px);
+          }
+        }
+      }
+      EXPECT_GT(compared, 9 * 2) << name;  // the test compared pixels, not only statuses
+    }
+  }
+}
+
+// A spherical one-surface cornea, kappa 0: the eye fixates along the line
+// through its centre of rotation, so a change of radius moves neither the
+// optical axis nor the apex (rotation_center_depth is measured from it):
+// the cornea's centre c moves by dc = -o dR. A convex spherical mirror
+// far from the light L and the camera C (distances D >> R) reflects at
+// p = c + R n, n the bisector of the unit directions u_L, u_C from c: to
+// first order dp = dc + n dR + R dn, where the directions turn by
+// du = -(I - u u^T) dc / D and the bisector by dn = (I - n n^T)(du_L +
+// du_C) / |u_L + u_C|. The glint moves by J dp, J the camera's
+// d(pixel)/d(point) at p. (Without the turn of n the field is 1.3% off.)
+TEST(CompareField, GlintsMoveAsAConvexMirrorsFirstOrderClosedFormSays) {
+  const Scene sphere = with_model(bundled("remote"), [](EyeModel& m) {
+    m = keratometric_eye();
+    m.kappa_horizontal_rad = m.kappa_vertical_rad = 0;
+  });
+  constexpr double dR = 1e-3;
+  const Scene bigger = with_model(sphere, [](EyeModel& m) { m.anterior_cornea.radius_mm += dR; });
+  CompareSettings settings;
+  settings.grid = 3;
+  const DisplacementField field = displacement_field(sphere, bigger, settings);
+  const Camera& camera = sphere.cameras.front();
+  int checked = 0;
+  for (const FieldPoint& p : field.points) {
+    const Eye eye = Eye::fixating(sphere.eyes.front().model(), sphere.eyes.front().rotation_center(),
+                                  sphere.screen->at({p.x, p.y}));
+    for (std::size_t i = 0; i < sphere.illuminators.size(); ++i) {
+      const FeaturePair& f = p.features[i];
+      const auto d = f.displacement();
+      if (f.world_status != PathStatus::ok || !d) continue;
+      const Reflection r = solve_reflection(eye, sphere.illuminators[i].position, camera.center());
+      std::array<double, 6> j{};
+      camera.project(r.point, j);
+      const Point3 c = eye.cornea_center();
+      const Vector3 dc = -eye.optical_axis().vector() * dR;
+      const auto turn = [&](const Point3& x) {  // du for the direction from c to x
+        const Vector3 to = x - c;
+        const UnitVector3 u = UnitVector3::normalize(to);
+        return (dc - u.vector() * dot(u, dc)) * (-1.0 / to.norm());
+      };
+      const Vector3 sum = (UnitVector3::normalize(sphere.illuminators[i].position - c).vector() +
+                           UnitVector3::normalize(camera.center() - c).vector());
+      const UnitVector3 n = UnitVector3::normalize(sum);
+      const Vector3 du = turn(sphere.illuminators[i].position) + turn(camera.center());
+      const Vector3 dn = (du - n.vector() * dot(n, du)) * (1.0 / sum.norm());
+      const double radius = eye.model().anterior_cornea.radius_mm;
+      const Vector3 dp = dc + n.vector() * dR + dn * radius;
+      const double u = j[0] * dp.x + j[1] * dp.y + j[2] * dp.z, v = j[3] * dp.x + j[4] * dp.y + j[5] * dp.z;
+      const double error = std::hypot(d->u - u, d->v - v), size = std::hypot(u, v);
+      // The issue asks 1%; they agree to 0.05% (dR's own second order is 1e-4).
+      EXPECT_LT(error, 0.002 * size) << f.feature << " at " << p.x << ", " << p.y << ": field (" << d->u << ", "
+                                     << d->v << "), closed form (" << u << ", " << v << ")";
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 9);
+}
+
+// The field against the solvers called directly on eyes built here: the
+// glint by solve_reflection (a finite difference of the specular-path
+// solver), the pupil centre by image_through_cornea (the refraction
+// solver), for a change of the aqueous index.
+TEST(CompareField, AgreesWithTheSolversCalledDirectly) {
+  const Scene world = bundled("remote");
+  const Scene assumed = with_model(world, [](EyeModel& m) { m.aqueous_index += 0.01; });
+  CompareSettings settings;
+  settings.grid = 2;
+  const DisplacementField field = displacement_field(world, assumed, settings);
+  const Camera& camera = world.cameras.front();
+  for (const FieldPoint& p : field.points) {
+    const Point3 target = world.screen->at({p.x, p.y});
+    const Eye w = Eye::fixating(world.eyes.front().model(), world.eyes.front().rotation_center(), target);
+    const Eye a = Eye::fixating(assumed.eyes.front().model(), assumed.eyes.front().rotation_center(), target);
+    const RefractedImage before = image_through_cornea(w, camera, w.pupil_center());
+    const RefractedImage after = image_through_cornea(a, camera, a.pupil_center());
+    ASSERT_EQ(before.status, PathStatus::ok);
+    const FeaturePair& center = p.features[world.illuminators.size()];
+    ASSERT_EQ(center.feature, "pupil_center");
+    const auto d = center.displacement();
+    ASSERT_TRUE(d);
+    EXPECT_NEAR(d->u, after.pixel.u - before.pixel.u, 1e-9);
+    EXPECT_NEAR(d->v, after.pixel.v - before.pixel.v, 1e-9);
+    EXPECT_GT(std::hypot(d->u, d->v), 1e-3);  // the index moved the pupil's image
+    // The glints are the cornea's surface alone: the index moves none.
+    for (std::size_t i = 0; i < world.illuminators.size(); ++i) {
+      const Reflection r = solve_reflection(w, world.illuminators[i].position, camera.center());
+      const Projection q = camera.project(r.point);
+      ASSERT_TRUE(p.features[i].world);
+      EXPECT_NEAR(p.features[i].world->u, q.pixel.u, 1e-9);
+      EXPECT_EQ(p.features[i].displacement()->u, 0.0);
+    }
+  }
+}
+
+TEST(CompareField, RefusesVersionsThatCannotBeCompared) {
+  const Scene remote = bundled("remote");
+  Scene two_eyes = remote;
+  two_eyes.eyes.push_back(remote.eyes.front());
+  EXPECT_THROW(displacement_field(remote, two_eyes), std::invalid_argument);
+  Scene one_light = remote;
+  one_light.illuminators.pop_back();
+  try {
+    displacement_field(remote, one_light);
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "compare: the versions must have the same cameras and lights (world: 1 cameras, 2 lights; "
+                           "assumed: 1 cameras, 1 lights)");
+  }
+  CompareSettings bad;
+  bad.grid = 0;
+  EXPECT_THROW(displacement_field(remote, remote, bad), std::invalid_argument);
+  bad = {};
+  bad.camera = 1;
+  EXPECT_THROW(displacement_field(remote, remote, bad), std::invalid_argument);
+}
+
+TEST(CompareField, CsvHasARowPerTargetAndFeatureAndEmptyCellsForWhatDoesNotExist) {
+  const Scene remote = bundled("remote");
+  CompareSettings settings;
+  settings.grid = 1;
+  const std::string csv = displacement_csv(displacement_field(remote, remote, settings));
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "target_x_mm,target_y_mm,feature,world_status,assumed_status,world_u_px,world_v_px,assumed_u_px,"
+            "assumed_v_px,du_px,dv_px,displacement_px,world_semi_axis_1_px,world_semi_axis_2_px,world_angle_deg,"
+            "assumed_semi_axis_1_px,assumed_semi_axis_2_px,assumed_angle_deg");
+  EXPECT_NE(csv.find(",glint.led_left,ok,ok,"), std::string::npos);
+  EXPECT_NE(csv.find(",0,0,0,,,,,,\n"), std::string::npos);  // a glint: no ellipse cells
+  int rows = 0;
+  for (char c : csv) rows += c == '\n';
+  EXPECT_EQ(rows, 1 + 4);  // header, two glints, the pupil's centre and ellipse
+}
+
+}  // namespace
+}  // namespace purkinje::studies

@@ -60,17 +60,21 @@ def calibrate(scene: Scene, *, grid: int = 8, calibration_grid: int = 3,
               head_moves: Sequence[Sequence[float]] = (), tracker_cornea: Optional[Tuple[float, float]] = None,
               fit_radius: bool = False, fit_pupil_depth: bool = False, glint_noise_px: Optional[float] = None,
               pupil_noise_px: Optional[float] = None, noise_frames: int = 64, seed: int = 1,
+              tracker_rig: Optional[Scene] = None,
               progress: Optional[Callable[[int, int], None]] = None) -> CalibrationStudy:
     """The calibration study on a rig with a screen, two or more lights and
     one eye, as `purkinje calibrate` runs it (the same options, by their
     long names: head_moves are (x, y, z) mm moves of the eye, tracker_cornea
-    the tracker's (R, Q)). `progress(done, total)` is called after each
+    the tracker's (R, Q)). `tracker_rig` is the rig as the tracker believes
+    it (its camera, lights, screen and eye; e.g. an LED where it is not):
+    the frames come from `scene`, the estimates from what the tracker
+    believes, the errors from the truth. `progress(done, total)` is called after each
     rendered frame; the GIL is released meanwhile. Raises ValueError for a
     rig it cannot calibrate or a setting out of range."""
     runs_json, text, frames_csv, panels = _purkinje._calibrate(
         scene, grid, calibration_grid, [tuple(m) for m in head_moves],
         tuple(tracker_cornea) if tracker_cornea is not None else None, fit_radius, fit_pupil_depth, glint_noise_px,
-        pupil_noise_px, noise_frames, seed, progress)
+        pupil_noise_px, noise_frames, seed, tracker_rig, progress)
     return CalibrationStudy(json.loads(runs_json)["runs"], text, frames_csv, [_panel(*p) for p in panels])
 
 

@@ -28,7 +28,7 @@ void bind_studies(py::module_& m) {
         [](const Scene& rig, int grid, int calibration_grid, const std::vector<std::array<double, 3>>& head_moves,
            const std::optional<std::array<double, 2>>& tracker_cornea, bool fit_radius, bool fit_pupil_depth,
            std::optional<double> glint_noise_px, std::optional<double> pupil_noise_px, int noise_frames,
-           std::uint64_t seed, const py::object& progress) {
+           std::uint64_t seed, const std::optional<Scene>& tracker_rig, const py::object& progress) {
           studies::CalibrationSettings settings;
           settings.grid = grid;
           settings.calibration_grid = calibration_grid;
@@ -40,6 +40,7 @@ void bind_studies(py::module_& m) {
           settings.pupil_noise_px = pupil_noise_px;
           settings.noise_frames = noise_frames;
           settings.seed = seed;
+          settings.tracker_rig = tracker_rig;
           reading({}, [&] { studies::check_calibration_rig(rig, rig.name, settings); });
           const std::size_t total = studies::calibration_frames(settings);
           std::size_t done = 0;
@@ -72,7 +73,7 @@ void bind_studies(py::module_& m) {
         },
         py::arg("rig"), py::arg("grid"), py::arg("calibration_grid"), py::arg("head_moves"), py::arg("tracker_cornea"),
         py::arg("fit_radius"), py::arg("fit_pupil_depth"), py::arg("glint_noise_px"), py::arg("pupil_noise_px"),
-        py::arg("noise_frames"), py::arg("seed"), py::arg("progress"));
+        py::arg("noise_frames"), py::arg("seed"), py::arg("tracker_rig"), py::arg("progress"));
 }
 
 }  // namespace purkinje::python

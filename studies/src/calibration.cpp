@@ -150,15 +150,17 @@ struct RenderedFrames {
   double spot_sigma_px = 0;  // what the tracker told its glint detector (0: estimated per frame)
 };
 
-RenderedFrames render_frames(const Scene& rig, const std::vector<std::pair<std::string, Point3>>& positions,
+RenderedFrames render_frames(const Scene& rig, const Scene& believed,
+                             const std::vector<std::pair<std::string, Point3>>& positions,
                              const CalibrationSettings& settings, const std::function<void()>& step) {
   const Screen& screen = *rig.screen;
   const Point3 home = positions.front().second;
   RenderedFrames frames;
   std::uint64_t seed = settings.seed;
-  // The tracker knows its rig: the camera's optics (the spot's width, the
-  // sensor's noise) and where the lights put glints on the nominal eye.
-  const Tracker tracker(rig.cameras.front(), rig.illuminators, rig.eyes.front());
+  // The tracker knows its rig, as it believes it: the camera's optics (the
+  // spot's width, the sensor's noise) and where the lights put glints on
+  // the nominal eye.
+  const Tracker tracker(believed.cameras.front(), believed.illuminators, believed.eyes.front());
   frames.spot_sigma_px = tracker.glint_settings().spot_sigma_px;
   for (const ScreenPoint& t : screen.grid(settings.calibration_grid, settings.calibration_grid)) {
     frames.calibration.push_back(render_frame(rig, home, 0, t, tracker, seed++));
@@ -269,7 +271,9 @@ SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings&
   r.add("cornea_radius_true", scene_eye.anterior_cornea.radius_mm, "mm");
   r.add("cornea_asphericity", nominal.cornea_asphericity);
   r.add("cornea_asphericity_true", scene_eye.anterior_cornea.asphericity);
-  r.add("tracker_cornea_from", settings.tracker_cornea ? std::string("given") : std::string("the scene's eye"));
+  r.add("tracker_cornea_from", settings.tracker_cornea  ? std::string("given")
+                               : settings.tracker_rig ? std::string("the tracker rig's eye")
+                                                      : std::string("the scene's eye"));
   r.add("refractive_index", nominal.refractive_index);
   r.add("rms_error_at_targets", model.rms_error_rad / kDegree, "deg");
   if (model.rotation_center) {
@@ -302,12 +306,16 @@ SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings&
 // The test frames at head position `p` (`name`) by both methods, scored
 // against the truth: a row each in `csv`, each method's results and the
 // gaze map's panel into `out`.
-void score_position(const Scene& rig, const std::vector<Frame>& tests, std::size_t p, const std::string& name,
-                    const trackers::ModelGazeCalibration& model, const trackers::PolynomialGaze& polynomial,
-                    const trackers::FeatureNoise& noise, std::ostream& csv, CalibrationStudy& out) {
-  const Camera& camera = rig.cameras.front();
+void score_position(const Scene& rig, const Scene& believed, const std::vector<Frame>& tests, std::size_t p,
+                    const std::string& name, const trackers::ModelGazeCalibration& model,
+                    const trackers::PolynomialGaze& polynomial, const trackers::FeatureNoise& noise,
+                    std::ostream& csv, CalibrationStudy& out) {
+  // The tracker estimates with what it believes; the errors are the
+  // world's: its screen, where the eye really is.
+  const Camera& camera = believed.cameras.front();
+  const Screen& believed_screen = *believed.screen;
   const Screen& screen = *rig.screen;
-  const Point3 nominal_cornea = rig.eyes.front().cornea_center();
+  const Point3 nominal_cornea = believed.eyes.front().cornea_center();
   Tally model_tally, polynomial_tally;
   std::vector<double> lateral, depth;
   int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
@@ -322,8 +330,8 @@ void score_position(const Scene& rig, const std::vector<Frame>& tests, std::size
         << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
     std::optional<ScreenPoint> by_model, by_polynomial;
     if (f.found) {
-      const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, rig.illuminators, *f.found, model.model,
-                                                                  screen, nominal_cornea, noise);
+      const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, believed.illuminators, *f.found,
+                                                                  model.model, believed_screen, nominal_cornea, noise);
       // The cornea's error along the camera's line of sight (depth) and
       // across it, on two fixed axes: the camera's x and y made
       // perpendicular to the line of sight. Each is checked against its
@@ -456,7 +464,18 @@ void check_calibration_rig(const Scene& rig, const std::string& rig_file, const 
     throw std::runtime_error(rig_file + ": " + std::to_string(rig.eyes.size()) +
                              " eyes: calibration follows one eye");
   }
-  const double q = rig.eyes.front().model().anterior_cornea.asphericity;
+  if (const auto& believed = settings.tracker_rig) {
+    if (believed->cameras.size() != rig.cameras.size() || believed->illuminators.size() != rig.illuminators.size() ||
+        believed->eyes.size() != 1 || !believed->screen) {
+      throw std::invalid_argument("calibration: the tracker rig must have the rig's cameras and lights in number, one "
+                                  "eye and a screen (it has " + std::to_string(believed->cameras.size()) +
+                                  " cameras, " + std::to_string(believed->illuminators.size()) + " lights, " +
+                                  std::to_string(believed->eyes.size()) + " eyes" +
+                                  (believed->screen ? "" : ", no screen") + ")");
+    }
+  }
+  const Scene& tracker_scene = settings.tracker_rig ? *settings.tracker_rig : rig;
+  const double q = tracker_scene.eyes.front().model().anterior_cornea.asphericity;
   if (!settings.tracker_cornea && !(q > -1 && q < 10)) {
     throw std::runtime_error(rig_file + ": the eye's anterior_cornea asphericity " + format(q) +
                              ": the tracker's cornea must be an ellipsoid, Q in (-1, 10); give another "
@@ -472,19 +491,20 @@ std::size_t calibration_frames(const CalibrationSettings& settings) {
 
 CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& settings,
                                  const std::function<void()>& step) {
-  const Camera& camera = rig.cameras.front();
-  const Screen& screen = *rig.screen;
+  const Scene& believed = settings.tracker_rig ? *settings.tracker_rig : rig;
+  const Camera& camera = believed.cameras.front();
+  const Screen& believed_screen = *believed.screen;
   const Point3 home = rig.eyes.front().rotation_center();
   // Where the tracker expects the cornea (its nominal eye): every fit's
   // start, never the frame's truth.
-  const Point3 nominal_cornea = rig.eyes.front().cornea_center();
-  const trackers::GazeEyeModel nominal = tracker_eye(rig, settings);
+  const Point3 nominal_cornea = believed.eyes.front().cornea_center();
+  const trackers::GazeEyeModel nominal = tracker_eye(believed, settings);
   std::vector<std::pair<std::string, Point3>> positions{{"home", home}};
   for (const std::array<double, 3>& m : settings.head_moves) {
     positions.push_back({"moved " + format(m[0]) + "," + format(m[1]) + "," + format(m[2]) + " mm",
                          home + Vector3{m[0], m[1], m[2]}});
   }
-  const RenderedFrames frames = render_frames(rig, positions, settings, step);
+  const RenderedFrames frames = render_frames(rig, believed, positions, settings, step);
   const std::vector<Frame>& calibration = frames.calibration;
 
   // Calibration on the frames whose features were all found.
@@ -494,7 +514,7 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
   for (const Frame& f : calibration) {
     if (!f.found) continue;
     features.push_back(*f.found);
-    targets.push_back(screen.at(f.target));
+    targets.push_back(believed_screen.at(f.target));  // where the tracker believes the target is
     screen_targets.push_back(f.target);
   }
   if (features.size() < 6) {
@@ -509,7 +529,7 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
   model_settings.noise = noise;
   model_settings.propagate_noise = true;
   const trackers::ModelGazeCalibration model = trackers::calibrate_model_gaze(
-      camera, rig.illuminators, features, targets, nominal, nominal_cornea, model_settings);
+      camera, believed.illuminators, features, targets, nominal, nominal_cornea, model_settings);
   const trackers::PolynomialGaze polynomial = trackers::PolynomialGaze::calibrate(features, screen_targets);
   if (!model.converged || model.covariance.empty()) {
     std::string message = "the model-based calibration failed:";
@@ -535,7 +555,7 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
          "polynomial_y_mm,polynomial_error_deg\n";
   try {
     for (std::size_t p = 0; p < positions.size(); ++p) {
-      score_position(rig, frames.tests, p, positions[p].first, model, polynomial, noise, csv, out);
+      score_position(rig, believed, frames.tests, p, positions[p].first, model, polynomial, noise, csv, out);
     }
   } catch (const std::exception& error) {
     throw std::runtime_error(std::string("while scoring: ") + error.what());

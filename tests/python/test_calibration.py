@@ -59,3 +59,14 @@ def test_displacement_field_is_zero_for_one_model_and_names_what_moves(remote_fi
     assert set(field.feature) == {"glint.led_left", "glint.led_right", "pupil_center", "pupil_ellipse"}
     with pytest.raises(ValueError, match="compare: grid = 0"):
         purkinje.displacement_field(scene, sphere, grid=0)
+
+
+def test_a_tracker_rig_moves_the_estimates_not_the_frames(remote_file):
+    scene = purkinje.load_scene(remote_file)
+    d = scene.to_dict()
+    d["illuminators"][0]["position_mm"][0] += 5
+    believed = purkinje.parse_scene(d)
+    right = purkinje.calibrate(scene, grid=2, noise_frames=0)
+    wrong = purkinje.calibrate(scene, grid=2, noise_frames=0, tracker_rig=believed)
+    assert wrong.frames()["glint_error_rms_px"].tolist() == right.frames()["glint_error_rms_px"].tolist()
+    assert wrong.frames()["model_error_deg"].mean() > right.frames()["model_error_deg"].mean()

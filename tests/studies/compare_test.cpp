@@ -4,11 +4,15 @@
 
 #include "purkinje/studies/compare.h"
 
+#include "purkinje/studies/calibration.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
+#include <sstream>
 #include <string>
+#include <variant>
 
 #include "purkinje/models/scene_file.h"
 #include "purkinje/models/specular.h"
@@ -195,6 +199,76 @@ TEST(CompareField, CsvHasARowPerTargetAndFeatureAndEmptyCellsForWhatDoesNotExist
   int rows = 0;
   for (char c : csv) rows += c == '\n';
   EXPECT_EQ(rows, 1 + 4);  // header, two glints, the pupil's centre and ellipse
+}
+
+
+// The consequences for a tracker: calibration with the rig as the tracker
+// believes it (CalibrationSettings::tracker_rig), the frames rendered
+// from the world.
+CalibrationSettings small_calibration() {
+  CalibrationSettings s;
+  s.grid = 2;
+  s.noise_frames = 0;
+  return s;
+}
+
+// The mean of a frames.csv column.
+double column_mean(const std::string& csv, const std::string& column) {
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  int index = 0, found = -1;
+  std::istringstream header(line);
+  for (std::string cell; std::getline(header, cell, ','); ++index) {
+    if (cell == column) found = index;
+  }
+  double sum = 0;
+  int n = 0;
+  while (std::getline(in, line)) {
+    // The position cell is quoted and may hold commas: count from the end.
+    std::vector<std::string> cells;
+    std::istringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    const std::size_t at = cells.size() - (index - static_cast<std::size_t>(found));
+    sum += std::stod(cells[at]);
+    ++n;
+  }
+  return sum / n;
+}
+
+TEST(CompareCalibration, ATrackerRigThatIsTheRigChangesNoNumber) {
+  const Scene rig = bundled("remote");
+  CalibrationSettings settings = small_calibration();
+  const CalibrationStudy plain = run_calibration(rig, settings);
+  settings.tracker_rig = rig;
+  const CalibrationStudy believed = run_calibration(rig, settings);
+  EXPECT_EQ(believed.frames_csv, plain.frames_csv);
+  ASSERT_EQ(believed.runs.size(), plain.runs.size());
+  for (std::size_t r = 0; r < plain.runs.size(); ++r) {
+    const auto& a = plain.runs[r].results.entries();
+    const auto& b = believed.runs[r].results.entries();
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (a[i].key == "tracker_cornea_from") continue;  // says where the model came from
+      EXPECT_TRUE(a[i].value == b[i].value) << a[i].key;
+    }
+  }
+}
+
+TEST(CompareCalibration, ALightTheTrackerBelievesElsewhereCostsGazeAccuracy) {
+  const Scene rig = bundled("remote");
+  Scene believed = rig;
+  believed.illuminators[0].position.x += 5;  // the tracker's LED 5 mm from the real one
+  CalibrationSettings settings = small_calibration();
+  const double right = column_mean(run_calibration(rig, settings).frames_csv, "model_error_deg");
+  settings.tracker_rig = believed;
+  const double wrong = column_mean(run_calibration(rig, settings).frames_csv, "model_error_deg");
+  EXPECT_GT(wrong, right + 0.05) << "right " << right << " deg, wrong " << wrong << " deg";
+
+  Scene one_light = rig;
+  one_light.illuminators.pop_back();
+  settings.tracker_rig = one_light;
+  EXPECT_THROW(check_calibration_rig(rig, "rig.json", settings), std::invalid_argument);
 }
 
 }  // namespace

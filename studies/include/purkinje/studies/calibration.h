@@ -37,13 +37,20 @@ struct CalibrationSettings {
   // calibration frames serve (nine measure a deviation to about 12%).
   int noise_frames = 64;
   std::uint64_t seed = 1;  // of the first frame's render; each next frame the next
+  // The rig as the tracker believes it (the compare study's assumed
+  // version): its camera, lights, screen and eye (the eye's anatomy and
+  // where it sits; tracker_cornea still overrides the cornea), while the
+  // frames are rendered from the rig itself and scored against its truth.
+  // Absent: the tracker believes the rig as it is.
+  std::optional<Scene> tracker_rig;
 };
 
 // Throws std::invalid_argument for settings out of their ranges (naming
-// the setting, its value and the range), and std::runtime_error, naming
+// the setting, its value and the range) or a tracker rig whose cameras and
+// lights are not the rig's in number, and std::runtime_error, naming
 // `rig_file`, for a rig the study cannot calibrate: no screen, fewer than
 // two lights, other than one eye, or (with no tracker cornea given) an eye
-// whose cornea is no ellipsoid.
+// whose cornea is no ellipsoid (the tracker rig's is checked alike).
 void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings);
 
 // How many frames run_calibration renders (for progress).

@@ -14,6 +14,11 @@ from ._trackers import Detections, Score, _detections
 PathLike = Union[str, os.PathLike]
 
 
+def _with_paths(outcome: Dict[str, object]) -> Dict[str, object]:
+    """An outcome's table and manifest as pathlib.Path."""
+    return {k: Path(v) if k in ("table", "manifest") else v for k, v in outcome.items()}
+
+
 def generate(spec: PathLike, output_dir: PathLike, *, count: Optional[int] = None, shard: Tuple[int, int] = (0, 1),
              resume: bool = False, threads: int = 0,
              progress: Optional[Callable[[int, int], None]] = None) -> Dict[str, object]:
@@ -28,8 +33,8 @@ def generate(spec: PathLike, output_dir: PathLike, *, count: Optional[int] = Non
     from . import _files
 
     index, shards = shard
-    outcome = _files.generate(os.fspath(spec), os.fspath(output_dir), count, index, shards, resume, threads, progress)
-    return {k: Path(v) if k in ("table", "manifest") else v for k, v in outcome.items()}
+    return _with_paths(_files.generate(os.fspath(spec), os.fspath(output_dir), count, index, shards, resume, threads,
+                                       progress))
 
 
 def merge(directory: PathLike) -> Dict[str, object]:
@@ -37,8 +42,7 @@ def merge(directory: PathLike) -> Dict[str, object]:
     manifest.json, as `purkinje merge` does."""
     from . import _files
 
-    outcome = _files.merge(os.fspath(directory))
-    return {k: Path(v) if k in ("table", "manifest") else v for k, v in outcome.items()}
+    return _with_paths(_files.merge(os.fspath(directory)))
 
 
 def track_set(inputs: Union[PathLike, Sequence[PathLike]], scene: Optional[Scene] = None, *,

@@ -115,13 +115,9 @@ class Tracker:
         if scene is None:
             self._tracker = _purkinje._Tracker()
         else:
-            names = [c.name for c in scene.cameras]
-            index = names.index(camera) if isinstance(camera, str) and camera in names else camera
-            if isinstance(index, str):
-                raise ValueError(f"Tracker: camera {camera!r}: the scene has no camera of that name "
-                                 f"(cameras: {', '.join(names)})")
-            self._tracker = _purkinje._Tracker(scene, index, eye)
-            self._bits = scene.cameras[index].sensor.bits if 0 <= index < len(scene.cameras) else None
+            index = _purkinje._camera_index(scene, camera, "Tracker")
+            self._tracker = _purkinje._Tracker(scene, index, eye)  # checks the index's range
+            self._bits = scene.cameras[index].sensor.bits
 
     @property
     def identifies_glints(self) -> bool:

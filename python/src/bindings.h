@@ -12,6 +12,7 @@
 #include <pybind11/pybind11.h>
 
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -64,6 +65,18 @@ auto reading(const std::vector<std::filesystem::path>& inputs, Read read) {
     throw std::invalid_argument(error.what());
   }
 }
+
+// A camera of `scene` by index (int) or name (str): its index. A name the
+// scene lacks is a ValueError naming the cameras, another type a
+// TypeError; `who` starts the message ("render"). The range of an index is
+// its user's to check.
+int camera_index(const Scene& scene, const py::object& camera, const std::string& who);
+
+// The step a long run (generate, calibrate) calls after each unit with
+// the GIL released: it takes the GIL, calls progress(done, total) unless
+// progress is None, and stops the run on Ctrl-C (Python sees signals only
+// when it runs), between units, each of which is all or nothing.
+std::function<void()> progress_step(const py::object& progress, std::size_t total);
 
 // Numbers as numpy arrays: a point or vector (3,), a pose (4, 4).
 py::array_t<double> array(const Point3& p);

@@ -7,6 +7,8 @@
 
 #include "bindings.h"
 
+#include <memory>
+
 #include "purkinje/models/dataset_spec.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
@@ -24,6 +26,34 @@ void raise_if_missing(const std::filesystem::path& file, const std::string& mess
   if (std::filesystem::exists(file, error) || error) return;
   PyErr_SetString(PyExc_FileNotFoundError, message.c_str());
   throw py::error_already_set();
+}
+
+int camera_index(const Scene& scene, const py::object& camera, const std::string& who) {
+  if (py::isinstance<py::str>(camera)) {
+    const std::string name = camera.cast<std::string>();
+    std::string names;
+    for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
+      if (scene.cameras[i].name() == name) return static_cast<int>(i);
+      names += (i ? ", " : "") + scene.cameras[i].name();
+    }
+    throw std::invalid_argument(who + ": camera \"" + name + "\": the scene has no camera of that name (cameras: " +
+                                names + ")");
+  }
+  if (!py::isinstance<py::int_>(camera) || py::isinstance<py::bool_>(camera)) {
+    throw py::type_error(who + ": camera must be a camera's index (int) or name (str), not " +
+                         std::string(py::str(camera.get_type().attr("__name__"))));
+  }
+  return camera.cast<int>();
+}
+
+std::function<void()> progress_step(const py::object& progress, std::size_t total) {
+  auto done = std::make_shared<std::size_t>(0);
+  return [progress, total, done] {
+    py::gil_scoped_acquire acquire;
+    ++*done;
+    if (!progress.is_none()) progress(*done, total);
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  };
 }
 
 py::array_t<double> array(const Vector3& v) {

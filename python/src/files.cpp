@@ -53,17 +53,7 @@ py::dict generate(const std::filesystem::path& spec_file, const std::filesystem:
   raise_refusal(studies::check_output_folder(output_dir, {}, studies::generate_outputs(plan),
                                              {spec_file, plan.spec.scene_file}));
   studies::GenerateHooks hooks;
-  std::size_t done = 0;
-  const std::size_t total = plan.images.size();
-  // After each image: the callback, and Ctrl-C (Python sees signals only
-  // when it runs; the GIL is released for the whole set). Either stops the
-  // run between images, each of which is all or nothing.
-  hooks.image_done = [&] {
-    py::gil_scoped_acquire acquire;
-    ++done;
-    if (!progress.is_none()) progress(done, total);
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-  };
+  hooks.image_done = progress_step(progress, plan.images.size());
   studies::GenerateOutcome outcome;
   {
     py::gil_scoped_release release;

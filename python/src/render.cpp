@@ -21,24 +21,6 @@ using renderer::ImagePlane;
 using renderer::RenderOptions;
 using renderer::RenderResult;
 
-int camera_index(const Scene& scene, const py::object& camera) {
-  if (py::isinstance<py::str>(camera)) {
-    const std::string name = camera.cast<std::string>();
-    std::string names;
-    for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
-      if (scene.cameras[i].name() == name) return static_cast<int>(i);
-      names += (i ? ", " : "") + scene.cameras[i].name();
-    }
-    throw std::invalid_argument("render: camera \"" + name + "\": the scene has no camera of that name (cameras: " +
-                                names + ")");
-  }
-  if (!py::isinstance<py::int_>(camera) || py::isinstance<py::bool_>(camera)) {
-    throw py::type_error("render: camera must be a camera's index (int) or name (str), not " +
-                         std::string(py::str(camera.get_type().attr("__name__"))));
-  }
-  return camera.cast<int>();  // the renderer checks the range
-}
-
 py::array view(const ImagePlane& plane, const py::object& owner) {
   return py::array_t<float>({plane.height, plane.width}, plane.values.data(), owner);
 }
@@ -119,7 +101,7 @@ std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, c
     throw std::invalid_argument("render: threads = " + std::to_string(threads) + ": must be from 0 (all) to 1024");
   }
   o.threads = threads;
-  const int index = camera_index(scene, camera);
+  const int index = camera_index(scene, camera, "render");  // the renderer checks the range
   py::gil_scoped_release release;
   renderer::render(out->scene, index, o, out->result);
   return out;

@@ -42,15 +42,7 @@ void bind_studies(py::module_& m) {
           settings.seed = seed;
           settings.tracker_rig = tracker_rig;
           reading({}, [&] { studies::check_calibration_rig(rig, rig.name, settings); });
-          const std::size_t total = studies::calibration_frames(settings);
-          std::size_t done = 0;
-          // After each frame: the callback, and Ctrl-C (the GIL is released meanwhile).
-          const auto step = [&] {
-            py::gil_scoped_acquire acquire;
-            ++done;
-            if (!progress.is_none()) progress(done, total);
-            if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-          };
+          const std::function<void()> step = progress_step(progress, studies::calibration_frames(settings));
           const studies::CalibrationStudy study = [&] {
             py::gil_scoped_release release;
             return studies::run_calibration(rig, settings, step);

@@ -289,6 +289,8 @@ void bind_trackers(py::module_& m) {
         },
         py::arg("file"), py::arg("text"));
 
+  m.def("_camera_index", &camera_index, py::arg("scene"), py::arg("camera"), py::arg("who"));
+
   py::class_<studies::Tracker>(m, "_Tracker")
       .def(py::init<>())
       .def(py::init([](const Scene& scene, int camera, int eye) {

@@ -106,6 +106,8 @@ def test_a_rig_tracker_reads_its_cameras_bits(source_dir):
     result = purkinje.render(scene, seed=3)
     assert result.image.dtype == np.uint16 and result.image.max() > 255
     tracker = purkinje.Tracker(scene)
+    with pytest.raises(ValueError, match='Tracker: camera "cam9": the scene has no camera of that name'):
+        purkinje.Tracker(scene, "cam9")
     from_array = tracker.track(result.image)
     assert len(from_array.glints) > 0
     assert [g.center_px.tolist() for g in from_array.glints] == [g.center_px.tolist() for g in tracker.track(result).glints]

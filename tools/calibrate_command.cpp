@@ -79,7 +79,11 @@ int run_calibrate(CalibrateRequest request) {
     write_file_atomically(dir / "calibration.json", studies::simulation_json(study.runs));
     write_file_atomically(dir / "calibration.csv", studies::simulation_csv(study.runs));
     write_file_atomically(dir / "frames.csv", study.frames_csv);
-    trackers::write_gaze_map(dir / "gaze_error.png", *rig.screen, {"model-based", "polynomial"}, study.panels);
+    std::vector<trackers::GazeMapPanel> panels;
+    for (const studies::GazePanel& p : study.panels) {
+      panels.push_back({p.title, p.targets, {p.estimates[0], p.estimates[1]}});
+    }
+    trackers::write_gaze_map(dir / "gaze_error.png", *rig.screen, {"model-based", "polynomial"}, panels);
   });
   std::cout << text << "\nwrote " << (dir / "calibration.txt").string()
             << ", calibration.json, calibration.csv, frames.csv and gaze_error.png\n";

@@ -48,7 +48,7 @@ void bind_studies(py::module_& m) {
             return studies::run_calibration(rig, settings, step);
           }();
           py::list panels;
-          for (const trackers::GazeMapPanel& panel : study.panels) {
+          for (const studies::GazePanel& panel : study.panels) {
             py::list targets, estimates;
             for (const ScreenPoint& t : panel.targets) targets.append(py::make_tuple(t.x_mm, t.y_mm));
             for (const auto& method : panel.estimates) {

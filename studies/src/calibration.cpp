@@ -44,10 +44,29 @@ std::string format(double value, int digits = 4) {
   return out.str();
 }
 
-// Renders the eye fixating `target` from rotation centre `center` and
-// reads the image with the detectors.
-Frame render_frame(const Scene& rig, const Point3& center, int position, const ScreenPoint& target,
-                   const Tracker& tracker, std::uint64_t seed) {
+// The features exactly where the scene puts them: each light's glint that
+// reaches the camera, and the pupil's whole imaged outline.
+void exact_features(const Scene& scene, Frame& f) {
+  const SceneTruth truth = compute_truth(scene);
+  const EyeInCameraTruth& view = truth.views.front();
+  std::vector<trackers::Glint> glints;
+  for (const GlintTruth& label : view.glints) {
+    if (label.status != PathStatus::ok) continue;
+    trackers::Glint g;
+    g.centre = label.pixel;
+    g.illuminator = label.illuminator;
+    glints.push_back(g);
+  }
+  f.glints_told = static_cast<int>(glints.size());
+  if (view.pupil.ellipse_valid && f.glints_told >= 2) {
+    f.found = trackers::GazeFeatures{glints, view.pupil.ellipse.center, trackers::ellipse_outline(view.pupil.ellipse)};
+  }
+}
+
+// The eye fixating `target` from rotation centre `center`: rendered and
+// read by the detectors, or its exact features.
+Frame frame_at(const Scene& rig, const Point3& center, int position, const ScreenPoint& target,
+               const Tracker& tracker, std::uint64_t seed, bool exact) {
   Frame f;
   f.position = position;
   f.target = target;
@@ -57,6 +76,10 @@ Frame render_frame(const Scene& rig, const Point3& center, int position, const S
   eye.set_appearance(nominal.appearance());
   scene.eyes = {eye};
   f.cornea_center = eye.cornea_center();
+  if (exact) {
+    exact_features(scene, f);
+    return f;
+  }
   renderer::RenderOptions options;
   options.seed = seed;
   const renderer::RenderResult result = renderer::render(scene, 0, options);
@@ -163,12 +186,12 @@ RenderedFrames render_frames(const Scene& rig, const Scene& believed,
   const Tracker tracker(believed.cameras.front(), believed.illuminators, believed.eyes.front());
   frames.spot_sigma_px = tracker.glint_settings().spot_sigma_px;
   for (const ScreenPoint& t : screen.grid(settings.calibration_grid, settings.calibration_grid)) {
-    frames.calibration.push_back(render_frame(rig, home, 0, t, tracker, seed++));
+    frames.calibration.push_back(frame_at(rig, home, 0, t, tracker, seed++, settings.exact_features));
     if (step) step();
   }
   for (std::size_t p = 0; p < positions.size(); ++p) {
     for (const ScreenPoint& t : screen.grid(settings.grid, settings.grid)) {
-      frames.tests.push_back(render_frame(rig, positions[p].second, static_cast<int>(p), t, tracker, seed++));
+      frames.tests.push_back(frame_at(rig, positions[p].second, static_cast<int>(p), t, tracker, seed++, settings.exact_features));
       if (step) step();
     }
   }
@@ -176,9 +199,10 @@ RenderedFrames render_frames(const Scene& rig, const Scene& believed,
   // are neither calibration nor test frames.
   std::mt19937_64 random(settings.seed);
   std::uniform_real_distribution<double> along(0, 1);
-  for (int i = 0; i < settings.noise_frames; ++i) {
+  const int noise_frames = settings.exact_features ? 0 : settings.noise_frames;
+  for (int i = 0; i < noise_frames; ++i) {
     const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
-    frames.noise.push_back(render_frame(rig, home, 0, t, tracker, seed++));
+    frames.noise.push_back(frame_at(rig, home, 0, t, tracker, seed++, settings.exact_features));
     if (step) step();
   }
   return frames;
@@ -235,8 +259,9 @@ MeasuredNoise measure_noise(const RenderedFrames& frames, const CalibrationSetti
       noise.glint_px = measured(&Frame::glint_errors_without_sd_px, std::nullopt, noise.glint_px);
     }
   }
-  out.measured_from = frames.noise.empty() ? std::string("measured on the calibration frames")
-                                           : "measured on " + std::to_string(frames.noise.size()) + " noise frames";
+  out.measured_from = settings.exact_features ? std::string("assumed: exact features (FeatureNoise's default)")
+                      : frames.noise.empty()  ? std::string("measured on the calibration frames")
+                                              : "measured on " + std::to_string(frames.noise.size()) + " noise frames";
   return out;
 }
 
@@ -254,6 +279,8 @@ SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings&
   Results& r = run.results;
   r.add("frames_used", static_cast<double>(frames_used));
   r.add("frames_rendered", static_cast<double>(frames.calibration.size()));
+  r.add("features", settings.exact_features ? std::string("exact: from the labels")
+                                            : std::string("detected in the rendered frames"));
   r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
   r.add("kappa_vertical", model.model.kappa_vertical_rad / kDegree, "deg");
   r.add("kappa_true_horizontal", rig.eyes.front().model().kappa_horizontal_rad / kDegree, "deg");
@@ -287,7 +314,9 @@ SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings&
   }
   r.add("glint_noise", noise.glint_px, "px");
   r.add("glint_noise_from", settings.glint_noise_px ? std::string("given") : measured_from);
-  if (frames.spot_sigma_px > 0) {
+  if (settings.exact_features) {
+    r.add("glint_spot_sigma", std::string("none: exact features"));
+  } else if (frames.spot_sigma_px > 0) {
     r.add("glint_spot_sigma", frames.spot_sigma_px, "px");
   } else {
     r.add("glint_spot_sigma", std::string("estimated per frame (defocus or sized lights)"));
@@ -319,10 +348,11 @@ void score_position(const Scene& rig, const Scene& believed, const std::vector<F
   Tally model_tally, polynomial_tally;
   std::vector<double> lateral, depth;
   int depth_within = 0, lateral_within = 0, cornea_with_sd = 0;
-  trackers::GazeMapPanel panel{name, {}, {{}, {}}};
+  GazePanel panel{name, {}, {}, {}};
   for (const Frame& f : tests) {
     if (f.position != static_cast<int>(p)) continue;
     panel.targets.push_back(f.target);
+    panel.cornea_centers.push_back(f.cornea_center);
     const auto error_deg = [&](const ScreenPoint& p) {
       return angle_between(screen.at(p) - f.cornea_center, screen.at(f.target) - f.cornea_center) / kDegree;
     };
@@ -486,7 +516,7 @@ void check_calibration_rig(const Scene& rig, const std::string& rig_file, const 
 std::size_t calibration_frames(const CalibrationSettings& settings) {
   return static_cast<std::size_t>(settings.calibration_grid * settings.calibration_grid +
                                   (1 + settings.head_moves.size()) * settings.grid * settings.grid +
-                                  settings.noise_frames);
+                                  (settings.exact_features ? 0 : settings.noise_frames));
 }
 
 CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& settings,
@@ -518,7 +548,9 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
     screen_targets.push_back(f.target);
   }
   if (features.size() < 6) {
-    throw std::runtime_error("the detectors found glints and pupil in " + std::to_string(features.size()) + " of " +
+    throw std::runtime_error(std::string(settings.exact_features ? "the camera sees glints of two lights and the pupil"
+                                                                 : "the detectors found glints and pupil") +
+                             " in " + std::to_string(features.size()) + " of " +
                              std::to_string(calibration.size()) + " calibration frames: at least 6 are needed");
   }
   const MeasuredNoise measured = measure_noise(frames, settings);

@@ -172,3 +172,260 @@ std::string displacement_csv(const DisplacementField& field) {
 }
 
 }  // namespace purkinje::studies
+
+namespace purkinje::studies {
+namespace {
+
+// Mean, RMS and largest of some values, with where the largest is.
+struct Spread {
+  std::size_t n = 0;
+  double sum = 0, sum2 = 0, max = 0;
+  std::size_t max_at = 0;
+  void add(double v, std::size_t at) {
+    if (n == 0 || v > max) max = v, max_at = at;
+    ++n, sum += v, sum2 += v * v;
+  }
+  void write(Results& r, const std::string& prefix, const std::string& unit) const {
+    if (n == 0) return;
+    r.add(prefix + "mean", sum / static_cast<double>(n), unit);
+    r.add(prefix + "rms", std::sqrt(sum2 / static_cast<double>(n)), unit);
+    r.add(prefix + "max", max, unit);
+  }
+};
+
+void summarize_field(const DisplacementField& field, std::vector<SimulationRun>& out) {
+  if (field.points.empty()) return;
+  const std::string unit = field.on_screen ? "mm" : "deg";
+  for (std::size_t f = 0; f < field.points.front().features.size(); ++f) {
+    SimulationRun run{"displacement", field.points.front().features[f].feature, {}, std::nullopt};
+    Results& r = run.results;
+    Spread length;
+    double du = 0, dv = 0;
+    int only_world = 0, only_assumed = 0;
+    Spread axis_1, axis_2;
+    for (std::size_t p = 0; p < field.points.size(); ++p) {
+      const FeaturePair& pair = field.points[p].features[f];
+      if (const auto d = pair.displacement()) {
+        length.add(std::hypot(d->u, d->v), p);
+        du += d->u, dv += d->v;
+      } else {
+        only_world += pair.world && !pair.assumed ? 1 : 0;
+        only_assumed += pair.assumed && !pair.world ? 1 : 0;
+      }
+      if (pair.world_ellipse && pair.assumed_ellipse) {
+        axis_1.add(std::abs(pair.assumed_ellipse->semi_axis_1_px - pair.world_ellipse->semi_axis_1_px), p);
+        axis_2.add(std::abs(pair.assumed_ellipse->semi_axis_2_px - pair.world_ellipse->semi_axis_2_px), p);
+      }
+    }
+    r.add("targets", static_cast<double>(field.points.size()));
+    r.add("targets_in_both", static_cast<double>(length.n));
+    r.add("targets_in_world_only", static_cast<double>(only_world));
+    r.add("targets_in_assumed_only", static_cast<double>(only_assumed));
+    if (length.n > 0) {
+      length.write(r, "displacement_", "px");
+      r.add("displacement_mean_u", du / static_cast<double>(length.n), "px");
+      r.add("displacement_mean_v", dv / static_cast<double>(length.n), "px");
+      const FieldPoint& at = field.points[length.max_at];
+      r.add("displacement_max_at", {at.x, at.y}, unit);
+    }
+    axis_1.write(r, "semi_axis_1_change_", "px");
+    axis_2.write(r, "semi_axis_2_change_", "px");
+    out.push_back(std::move(run));
+  }
+}
+
+// The runs' results under `prefix`: what each calibration reported.
+void add_calibration_runs(const std::string& prefix, const CalibrationStudy& study, std::vector<SimulationRun>& out) {
+  for (SimulationRun run : study.runs) {
+    run.case_name = prefix + ": " + run.case_name;
+    out.push_back(std::move(run));
+  }
+}
+
+// Per head position and method: both versions' gaze errors and the change.
+void summarize_gaze(const CompareStudy& study, std::vector<SimulationRun>& out) {
+  for (const GazePanel& panel : study.baseline->panels) {
+    for (const char* method : {"model-based", "polynomial"}) {
+      SimulationRun run{"gaze: " + panel.title, method, {}, std::nullopt};
+      Spread baseline, assumed, change;
+      int missing = 0;
+      for (std::size_t i = 0; i < study.gaze.size(); ++i) {
+        const GazeChange& g = study.gaze[i];
+        if (g.position != panel.title || g.method != method) continue;
+        if (g.baseline_error_deg) baseline.add(*g.baseline_error_deg, i);
+        if (g.assumed_error_deg) assumed.add(*g.assumed_error_deg, i);
+        if (g.change_deg) {
+          change.add(*g.change_deg, i);
+        } else {
+          ++missing;
+        }
+      }
+      Results& r = run.results;
+      r.add("targets_with_both_estimates", static_cast<double>(change.n));
+      r.add("targets_without", static_cast<double>(missing));
+      baseline.write(r, "error_believing_world_", "deg");
+      assumed.write(r, "error_believing_assumed_", "deg");
+      change.write(r, "change_", "deg");
+      if (change.n > 0) {
+        const ScreenPoint& at = study.gaze[change.max_at].target;
+        r.add("change_max_at", {at.x_mm, at.y_mm}, "mm");
+      }
+      // The tracker's own account, believing the assumed version: its
+      // cornea errors and how often the truth lies within 3 reported s.d.
+      for (const SimulationRun& a : study.assumed->runs) {
+        if (a.case_name != panel.title || a.algorithm != method) continue;
+        for (const char* key : {"gaze_within_3sd_screen_x", "gaze_within_3sd_screen_y", "cornea_lateral_error_mean",
+                                "cornea_depth_error_mean", "cornea_depth_error_rms", "cornea_within_3sd_depth",
+                                "cornea_within_3sd_lateral_both_axes"}) {
+          if (const Results::Entry* e = a.results.find(key)) {
+            r.add(std::string("believing_assumed_") + key, std::get<double>(e->value), e->unit);
+          }
+        }
+      }
+      out.push_back(std::move(run));
+    }
+  }
+}
+
+void summarize_images(const renderer::RenderResult& world, const renderer::RenderResult& assumed,
+                      std::vector<SimulationRun>& out) {
+  SimulationRun run{"images", "difference (assumed - world)", {}, std::nullopt};
+  Results& r = run.results;
+  const auto& we = world.electrons.values;
+  const auto& ae = assumed.electrons.values;
+  double largest = 0, sum2 = 0;
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < we.size(); ++i) {
+    const double d = static_cast<double>(ae[i]) - static_cast<double>(we[i]);
+    largest = std::max(largest, std::abs(d));
+    sum2 += d * d;
+    changed += d != 0 ? 1 : 0;
+  }
+  std::size_t sensor_changed = 0;
+  int sensor_largest = 0;
+  for (std::size_t i = 0; i < world.sensor.values.size(); ++i) {
+    const int d = static_cast<int>(assumed.sensor.values[i]) - static_cast<int>(world.sensor.values[i]);
+    sensor_largest = std::max(sensor_largest, std::abs(d));
+    sensor_changed += d != 0 ? 1 : 0;
+  }
+  const double n = static_cast<double>(we.size());
+  r.add("pixels", n);
+  r.add("electrons_changed_pixels", 100.0 * static_cast<double>(changed) / n, "%");
+  r.add("electrons_difference_max", largest, "e-");
+  r.add("electrons_difference_rms", std::sqrt(sum2 / n), "e-");
+  r.add("sensor_changed_pixels", 100.0 * static_cast<double>(sensor_changed) / n, "%");
+  r.add("sensor_difference_max", static_cast<double>(sensor_largest), "DN");
+  out.push_back(std::move(run));
+}
+
+}  // namespace
+
+CalibrationSettings CompareStudySettings::default_calibration() {
+  CalibrationSettings s;
+  s.grid = 9;
+  s.exact_features = true;
+  s.noise_frames = 0;
+  return s;
+}
+
+std::vector<std::array<double, 3>> default_head_moves(const Scene& world) {
+  if (world.eyes.empty() || world.cameras.empty()) return {};
+  const Camera& camera = world.cameras.front();
+  const Vector3 to_eye = world.eyes.front().rotation_center() - camera.center();
+  const double distance = to_eye.norm();
+  const Vector3 side = camera.world_from_camera() * Vector3{1, 0, 0};
+  const Vector3 away = to_eye / distance;
+  const auto move = [](const Vector3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
+  return {move(side * (distance / 12)), move(away * (distance / 6))};
+}
+
+std::size_t compare_steps(const Scene& world, const CompareStudySettings& settings) {
+  std::size_t steps = settings.images ? 2 : 0;
+  if (settings.calibrate && world.screen) steps += 2 * calibration_frames(settings.calibration);
+  return steps;
+}
+
+CompareStudy run_compare(const Scene& world, const Scene& assumed, const CompareStudySettings& settings,
+                         const std::function<void()>& step) {
+  CompareStudy study;
+  study.field = displacement_field(world, assumed, settings.field);
+  summarize_field(study.field, study.summary);
+
+  if (!settings.calibrate) {
+    study.calibration_skipped = "not asked for";
+  } else {
+    CalibrationSettings believing_world = settings.calibration;
+    believing_world.tracker_rig.reset();
+    CalibrationSettings believing_assumed = settings.calibration;
+    believing_assumed.tracker_rig = assumed;
+    // A tracker believes a screen: the world's, where the assumed version has none.
+    if (!assumed.screen) believing_assumed.tracker_rig->screen = world.screen;
+    try {
+      check_calibration_rig(world, "the world", believing_assumed);
+    } catch (const std::runtime_error& cannot) {
+      study.calibration_skipped = cannot.what();
+    }
+    if (study.calibration_skipped.empty()) {
+      study.baseline = run_calibration(world, believing_world, step);
+      study.assumed = run_calibration(world, believing_assumed, step);
+      const Screen& screen = *world.screen;
+      for (std::size_t p = 0; p < study.baseline->panels.size(); ++p) {
+        const GazePanel& b = study.baseline->panels[p];
+        const GazePanel& a = study.assumed->panels[p];
+        for (std::size_t m = 0; m < 2; ++m) {
+          for (std::size_t i = 0; i < b.targets.size(); ++i) {
+            GazeChange g{b.title, m == 0 ? "model-based" : "polynomial", b.targets[i], b.estimates[m][i],
+                         a.estimates[m][i], std::nullopt, std::nullopt, std::nullopt};
+            const Point3& eye = b.cornea_centers[i];
+            const auto angle = [&](const ScreenPoint& from, const ScreenPoint& to) {
+              return angle_between(screen.at(from) - eye, screen.at(to) - eye) / kDegree;
+            };
+            if (g.baseline) g.baseline_error_deg = angle(*g.baseline, g.target);
+            if (g.assumed) g.assumed_error_deg = angle(*g.assumed, g.target);
+            if (g.baseline && g.assumed) g.change_deg = angle(*g.baseline, *g.assumed);
+            study.gaze.push_back(g);
+          }
+        }
+      }
+      summarize_gaze(study, study.summary);
+    }
+  }
+  if (!study.calibration_skipped.empty()) {
+    SimulationRun skipped{"gaze", "both methods", {}, std::nullopt};
+    skipped.results.add("calibration", "skipped: " + study.calibration_skipped);
+    study.summary.push_back(std::move(skipped));
+  }
+
+  if (settings.images) {
+    study.world_image = renderer::render(world, settings.field.camera, settings.render);
+    if (step) step();
+    study.assumed_image = renderer::render(assumed, settings.field.camera, settings.render);
+    if (step) step();
+    summarize_images(*study.world_image, *study.assumed_image, study.summary);
+  }
+  if (study.baseline) {
+    add_calibration_runs("believing the world", *study.baseline, study.summary);
+    add_calibration_runs("believing the assumed", *study.assumed, study.summary);
+  }
+  return study;
+}
+
+std::string gaze_change_csv(const std::vector<GazeChange>& gaze) {
+  std::ostringstream out;
+  const auto number = [](const std::optional<double>& v) { return v ? check::format_number(*v) : std::string(); };
+  out << "position,method,target_x_mm,target_y_mm,believing_world_x_mm,believing_world_y_mm,"
+         "believing_assumed_x_mm,believing_assumed_y_mm,error_believing_world_deg,error_believing_assumed_deg,"
+         "change_deg\n";
+  for (const GazeChange& g : gaze) {
+    const auto point = [&](const std::optional<ScreenPoint>& p) {
+      return p ? check::format_number(p->x_mm) + "," + check::format_number(p->y_mm) : std::string(",");
+    };
+    out << csv_cell(g.position) << ',' << g.method << ',' << check::format_number(g.target.x_mm) << ','
+        << check::format_number(g.target.y_mm) << ',' << point(g.baseline) << ',' << point(g.assumed) << ','
+        << number(g.baseline_error_deg) << ',' << number(g.assumed_error_deg) << ',' << number(g.change_deg)
+        << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace purkinje::studies

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
@@ -269,6 +270,101 @@ TEST(CompareCalibration, ALightTheTrackerBelievesElsewhereCostsGazeAccuracy) {
   one_light.illuminators.pop_back();
   settings.tracker_rig = one_light;
   EXPECT_THROW(check_calibration_rig(rig, "rig.json", settings), std::invalid_argument);
+}
+
+// Exact features: the features where the labels put them, no render.
+TEST(CompareCalibration, WithExactFeaturesTheTrackersOwnEyeGivesGazeToTheSolversTolerance) {
+  // The keratometric eye is what the model-based tracker assumes (one
+  // sphere, one index): believing it, from exact features, gaze is exact
+  // but for the fit's tolerances, at home and after head moves.
+  const Scene rig = with_model(bundled("remote"), [](EyeModel& m) {
+    const EyeModel k = keratometric_eye();
+    m.anterior_cornea = k.anterior_cornea;
+    m.posterior_cornea.reset();
+    m.aqueous_index = k.aqueous_index;
+  });
+  CalibrationSettings settings = CompareStudySettings::default_calibration();
+  settings.grid = 3;
+  settings.head_moves = default_head_moves(rig);
+  const CalibrationStudy study = run_calibration(rig, settings);
+  ASSERT_EQ(study.panels.size(), 3u);
+  for (const SimulationRun& run : study.runs) {
+    if (run.algorithm != "model-based" || run.case_name == "calibration") continue;
+    const auto worst = run.results.number("gaze_error_max");
+    ASSERT_TRUE(worst) << run.case_name;
+    EXPECT_LT(*worst, 1e-3) << run.case_name;
+  }
+  EXPECT_EQ(calibration_frames(settings), 9u + 3 * 9);
+}
+
+CompareStudySettings small_study() {
+  CompareStudySettings s;
+  s.calibration.head_moves = default_head_moves(bundled("remote"));
+  s.field.grid = 3;
+  s.calibration.grid = 3;
+  s.render.seed = 3;
+  return s;
+}
+
+TEST(CompareStudy, IdenticalVersionsCostNothingAnywhere) {
+  const Scene rig = bundled("remote");
+  int steps = 0;
+  const CompareStudy study = run_compare(rig, rig, small_study(), [&] { ++steps; });
+  EXPECT_EQ(static_cast<std::size_t>(steps), compare_steps(rig, small_study()));
+  ASSERT_TRUE(study.baseline && study.assumed && study.world_image && study.assumed_image);
+  ASSERT_EQ(study.gaze.size(), 3u * 2 * 9);  // positions, methods, targets
+  for (const GazeChange& g : study.gaze) {
+    ASSERT_TRUE(g.change_deg) << g.position << " " << g.method;
+    EXPECT_EQ(*g.change_deg, 0.0);
+    EXPECT_EQ(*g.baseline_error_deg, *g.assumed_error_deg);
+  }
+  EXPECT_EQ(study.world_image->electrons.values, study.assumed_image->electrons.values);
+  EXPECT_EQ(study.world_image->sensor.values, study.assumed_image->sensor.values);
+  for (const SimulationRun& run : study.summary) {
+    for (const char* key : {"displacement_max", "change_max", "electrons_difference_max", "sensor_difference_max"}) {
+      if (const auto v = run.results.number(key)) EXPECT_EQ(*v, 0.0) << run.case_name << " " << key;
+    }
+  }
+}
+
+TEST(CompareStudy, ASphericalTrackerOnTheNavarroEyeMovesGlintsAndGaze) {
+  const Scene world = bundled("remote");  // Navarro: aspheric, two surfaces
+  const Scene spherical = with_model(world, [](EyeModel& m) {
+    m.anterior_cornea = {7.8, 0};
+    m.posterior_cornea.reset();
+    m.aqueous_index = 1.3375;
+  });
+  CompareStudySettings settings = small_study();
+  settings.images = false;
+  const CompareStudy study = run_compare(world, spherical, settings);
+  EXPECT_FALSE(study.world_image);
+  int runs_with_change = 0;
+  for (const SimulationRun& run : study.summary) {
+    if (run.case_name.starts_with("gaze: ") && run.algorithm == "model-based") {
+      ++runs_with_change;
+      ASSERT_TRUE(run.results.number("change_max")) << run.case_name;
+      EXPECT_GT(*run.results.number("change_max"), 0.01) << run.case_name;
+    }
+    if (run.case_name == "displacement" && run.algorithm.starts_with("glint.")) {
+      ASSERT_TRUE(run.results.number("displacement_max")) << run.algorithm;
+      EXPECT_GT(*run.results.number("displacement_max"), 0.05) << run.algorithm;
+    }
+  }
+  EXPECT_EQ(runs_with_change, 3);
+  const std::string csv = gaze_change_csv(study.gaze);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 3 * 2 * 9);
+}
+
+TEST(CompareStudy, WithoutAScreenItComparesOnACapAndSaysWhyItDidNotCalibrate) {
+  Scene world = bundled("remote");
+  world.screen.reset();
+  CompareStudySettings settings = small_study();
+  settings.images = false;
+  const CompareStudy study = run_compare(world, world, settings);
+  EXPECT_FALSE(study.field.on_screen);
+  EXPECT_FALSE(study.baseline);
+  EXPECT_NE(study.calibration_skipped.find("screen"), std::string::npos) << study.calibration_skipped;
+  EXPECT_EQ(compare_steps(world, settings), 0u);
 }
 
 }  // namespace

@@ -37,6 +37,12 @@ struct CalibrationSettings {
   // calibration frames serve (nine measure a deviation to about 12%).
   int noise_frames = 64;
   std::uint64_t seed = 1;  // of the first frame's render; each next frame the next
+  // Features from the labels instead of images: each frame's glints and
+  // pupil ellipse exactly where the scene puts them (no render, no
+  // detector, no noise frames). The uncertainties then assume the given
+  // glint and pupil noise, or FeatureNoise's defaults; the errors are the
+  // models' alone. What the compare study's geometric part runs.
+  bool exact_features = false;
   // The rig as the tracker believes it (the compare study's assumed
   // version): its camera, lights, screen and eye (the eye's anatomy and
   // where it sits; tracker_cornea still overrides the cornea), while the
@@ -53,15 +59,26 @@ struct CalibrationSettings {
 // whose cornea is no ellipsoid (the tracker rig's is checked alike).
 void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings);
 
-// How many frames run_calibration renders (for progress).
+// How many frames run_calibration renders (for progress; with exact
+// features, how many it computes).
 std::size_t calibration_frames(const CalibrationSettings& settings);
+
+// One head position's gaze: the screen's targets, where the eye's cornea
+// centre truly was for each, and where each method put each (nullopt: no
+// estimate).
+struct GazePanel {
+  std::string title;
+  std::vector<ScreenPoint> targets;
+  std::vector<Point3> cornea_centers;
+  std::array<std::vector<std::optional<ScreenPoint>>, 2> estimates;  // model-based, polynomial
+};
 
 struct CalibrationStudy {
   // Per method, the calibration's results, then per head position the
   // test frames' gaze and cornea errors (every partial result kept).
   std::vector<SimulationRun> runs;
   std::string frames_csv;  // a row per test frame
-  std::vector<trackers::GazeMapPanel> panels;  // per head position: targets and both methods' estimates
+  std::vector<GazePanel> panels;  // per head position
 };
 
 // The study on a rig check_calibration_rig accepts, `step` called after

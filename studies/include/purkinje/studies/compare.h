@@ -5,14 +5,21 @@
 // targets, each eye fixates the same target in its own version of the
 // rig; where each feature lands in the image in both versions, and how
 // far it moved, is the displacement field (the geometric part: exact
-// labels, no images). Documented in docs/compare.md (to come).
+// labels, no images). The study adds what the difference costs a
+// tracker (calibrated on the world's frames, believing either version) and
+// both versions' images. Documented in docs/compare.md.
 
+#include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "purkinje/models/scene.h"
 #include "purkinje/models/truth.h"
+#include "purkinje/renderer/render.h"
+#include "purkinje/studies/calibration.h"
+#include "purkinje/studies/simulation.h"
 
 namespace purkinje::studies {
 
@@ -59,5 +66,72 @@ DisplacementField displacement_field(const Scene& world, const Scene& assumed, c
 // pixels, the displacement and its length, and the ellipses' centres and
 // semi-axes (pupil_ellipse); empty cells where a value does not exist.
 std::string displacement_csv(const DisplacementField& field);
+
+struct CompareStudySettings {
+  CompareSettings field;
+  // What the difference costs a tracker (when the world has a screen and
+  // two or more lights): both methods calibrated on the world's frames,
+  // once believing the world (the baseline: the methods' own errors) and
+  // once believing the assumed version (its eye, camera, lights and
+  // screen); the difference between the two is the discrepancy's cost.
+  // Its tracker_rig is set by the study; exact_features is the default
+  // (the geometric part: no render), grid 9, no head moves (see
+  // default_head_moves).
+  bool calibrate = true;
+  CalibrationSettings calibration = default_calibration();
+  // Both versions rendered by the field's camera with these options (the
+  // same seed: the same noise where nothing changed).
+  bool images = true;
+  renderer::RenderOptions render;
+
+  static CalibrationSettings default_calibration();
+};
+
+// One target at one head position by one method: its estimate believing
+// each version, and the angle between them at the eye (what the
+// discrepancy moves gaze by).
+struct GazeChange {
+  std::string position, method;
+  ScreenPoint target;
+  std::optional<ScreenPoint> baseline, assumed;
+  std::optional<double> baseline_error_deg, assumed_error_deg, change_deg;
+};
+
+struct CompareStudy {
+  DisplacementField field;
+  // Present when the study calibrated (else `calibration_skipped` says why).
+  std::optional<CalibrationStudy> baseline, assumed;
+  std::vector<GazeChange> gaze;
+  std::string calibration_skipped;
+  // Present when the study rendered.
+  std::optional<renderer::RenderResult> world_image, assumed_image;
+  // Every number the figures show, summarized: per feature its
+  // displacements, per head position and method the gaze errors (both
+  // versions, and the change), the cornea's errors and the share within
+  // the reported uncertainty, the images' difference; then both
+  // calibrations' own results. simulation_text/json/csv write it.
+  std::vector<SimulationRun> summary;
+};
+
+// The study. Throws std::invalid_argument as displacement_field and
+// check_calibration_rig do (the calibration settings' ranges, the tracker
+// rig's numbers); what the renderer and the calibration throw passes
+// through. `step` is called after each render (two) and each calibration
+// frame.
+CompareStudy run_compare(const Scene& world, const Scene& assumed, const CompareStudySettings& settings = {},
+                         const std::function<void()>& step = {});
+
+// Head moves that keep a rig's eye in its camera's view: sideways (the
+// camera's x) by a twelfth of the eye's distance from the first camera,
+// and away from it by a sixth (50 and 100 mm for a remote tracker at 600
+// mm, 2.5 and 5 mm for a headset's 30 mm); none without an eye or camera.
+std::vector<std::array<double, 3>> default_head_moves(const Scene& world);
+
+// How many steps run_compare takes (for progress).
+std::size_t compare_steps(const Scene& world, const CompareStudySettings& settings);
+
+// A row per head position, method and target: the target, both estimates,
+// both errors and the change (deg); empty cells where there is none.
+std::string gaze_change_csv(const std::vector<GazeChange>& gaze);
 
 }  // namespace purkinje::studies

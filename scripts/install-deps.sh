@@ -15,8 +15,10 @@ packages=(
   # that name functions and lines.
   clang libclang-rt-14-dev llvm
   gcovr python3
-  # The Python package (python/, docs/python.md) and its tests.
+  # The Python package (python/, docs/python.md) and its tests; matplotlib
+  # draws calibrate's and compare's figures (python/purkinje/figures.py).
   pybind11-dev python3-dev python3-numpy python3-pytest python3-pil python3-pandas python3-torch
+  python3-matplotlib
   # The Slurm test (tests/slurm) starts a single-node cluster of its own.
   slurmctld slurmd slurm-client munge
 )

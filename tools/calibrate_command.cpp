@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "cli.h"
+#include "figures.h"
 #include "progress.h"
 #include "purkinje/models/output_file.h"
 #include "purkinje/models/scene_file.h"
 #include "purkinje/studies/calibration.h"
 #include "purkinje/studies/simulation.h"
-#include "purkinje/trackers/image_file.h"
 
 namespace purkinje::tools {
 namespace {
@@ -29,6 +29,7 @@ struct CalibrateRequest : studies::CalibrationSettings {
   std::string scene_file;  // with a screen; its eye is the one followed
   std::string output_dir;
   bool quiet = false;  // no progress on stderr
+  bool no_figures = false;
   std::vector<std::string> head_move_texts;  // as given: "x,y,z" in mm
   std::string tracker_cornea_text;           // as given: "R,Q"
 };
@@ -62,7 +63,8 @@ void read_text_options(CalibrateRequest& request) {
 int run_calibrate(CalibrateRequest request) {
   read_text_options(request);
   refuse(check_output_folder(request.output_dir, {},
-                             {"calibration.txt", "calibration.json", "calibration.csv", "frames.csv", "gaze_error.png"},
+                             {"calibration.txt", "calibration.json", "calibration.csv", "frames.csv", "gaze_error.png",
+                              "figures.json"},
                              {request.scene_file}));
   const Scene rig = load_scene(request.scene_file);
   studies::check_calibration_rig(rig, request.scene_file, request);
@@ -79,14 +81,17 @@ int run_calibrate(CalibrateRequest request) {
     write_file_atomically(dir / "calibration.json", studies::simulation_json(study.runs));
     write_file_atomically(dir / "calibration.csv", studies::simulation_csv(study.runs));
     write_file_atomically(dir / "frames.csv", study.frames_csv);
-    std::vector<trackers::GazeMapPanel> panels;
-    for (const studies::GazePanel& p : study.panels) {
-      panels.push_back({p.title, p.targets, {p.estimates[0], p.estimates[1]}});
-    }
-    trackers::write_gaze_map(dir / "gaze_error.png", *rig.screen, {"model-based", "polynomial"}, panels);
   });
+  std::optional<std::string> no_figures;
+  if (request.no_figures) {
+    no_figures = "--no-figures";
+  } else {
+    writing([&] { no_figures = draw_figures("calibration", dir); });
+  }
   std::cout << text << "\nwrote " << (dir / "calibration.txt").string()
-            << ", calibration.json, calibration.csv, frames.csv and gaze_error.png\n";
+            << ", calibration.json, calibration.csv, frames.csv\n"
+            << (no_figures ? "figures: not drawn: " + *no_figures : std::string("figures: gaze_error.png, figures.json"))
+            << "\n";
   return kOk;
 }
 
@@ -100,8 +105,8 @@ Command add_calibrate_command(CLI::App& app) {
                                 "calibration grid, then a test grid at its own place and at each head move;\n"
                                 "each frame is rendered and read by purkinje's detectors. The model-based method\n"
                                 "and the second-order polynomial are calibrated and scored against the truth.\n"
-                                "Writes DIR/calibration.txt, calibration.json, calibration.csv, frames.csv and\ngaze_error.png "
-                                "(docs/calibration.md).\n\n") +
+                                "Writes DIR/calibration.txt, calibration.json, calibration.csv, frames.csv, and\n"
+                                "gaze_error.png with figures.json (docs/calibration.md).\n\n") +
                     kExitCodes);
   calibrate->add_option("SCENE", request->scene_file, "Scene file with a screen")->required();
   calibrate->add_option("-o,--output", request->output_dir, "Output folder (created if missing)")->required();
@@ -134,6 +139,7 @@ Command add_calibrate_command(CLI::App& app) {
                         "Frames at random targets that only measure the detectors' noise (0: the calibration frames)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
+  calibrate->add_flag("--no-figures", request->no_figures, "Data files only (no matplotlib)");
   calibrate->add_flag("--quiet", request->quiet, "No progress on standard error");
   calibrate->add_option("--seed", request->seed, "Render seed of the first frame")->check(kSeed)->capture_default_str();
   return {calibrate, [request] { return run_command("calibrate", [&] { return run_calibrate(*request); }); }};

@@ -64,6 +64,7 @@ Command add_render_command(CLI::App& app);
 Command add_track_command(CLI::App& app);
 Command add_score_command(CLI::App& app);
 Command add_calibrate_command(CLI::App& app);
+Command add_compare_command(CLI::App& app);
 Command add_generate_command(CLI::App& app);
 Command add_merge_command(CLI::App& app);
 

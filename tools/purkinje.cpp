@@ -72,6 +72,7 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   const std::vector<Command> commands = {add_truth_command(app), add_render_command(app), add_track_command(app),
                                          add_score_command(app), add_calibrate_command(app),
+                                         add_compare_command(app),
                                          add_generate_command(app), add_merge_command(app)};
   if (unknown_subcommand(app, argc, argv)) return kUsageError;
   try {

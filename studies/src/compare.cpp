@@ -331,12 +331,16 @@ CalibrationSettings CompareStudySettings::default_calibration() {
 std::vector<std::array<double, 3>> default_head_moves(const Scene& world) {
   if (world.eyes.empty() || world.cameras.empty()) return {};
   const Camera& camera = world.cameras.front();
-  const Vector3 to_eye = world.eyes.front().rotation_center() - camera.center();
-  const double distance = to_eye.norm();
-  const Vector3 side = camera.world_from_camera() * Vector3{1, 0, 0};
-  const Vector3 away = to_eye / distance;
-  const auto move = [](const Vector3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
-  return {move(side * (distance / 12)), move(away * (distance / 6))};
+  const double distance = (world.eyes.front().rotation_center() - camera.center()).norm();
+  // Two significant digits: moves people can name (50 and 100 mm, not 50.47).
+  const double decade = std::pow(10.0, std::floor(std::log10(distance / 12)) - 1);
+  const double step = std::round(distance / 12 / decade) * decade;
+  const auto move = [&](const Vector3& along_camera) {
+    const Vector3 v = camera.world_from_camera() * along_camera;
+    const auto tidy = [](double x) { return std::abs(x) < 1e-9 ? 0.0 : x; };  // no -0 or 1e-17 in names
+    return std::array<double, 3>{tidy(v.x), tidy(v.y), tidy(v.z)};
+  };
+  return {move(Vector3{step, 0, 0}), move(Vector3{0, 0, 2 * step})};
 }
 
 std::size_t compare_steps(const Scene& world, const CompareStudySettings& settings) {

@@ -322,7 +322,9 @@ TEST(CompareStudy, IdenticalVersionsCostNothingAnywhere) {
   EXPECT_EQ(study.world_image->sensor.values, study.assumed_image->sensor.values);
   for (const SimulationRun& run : study.summary) {
     for (const char* key : {"displacement_max", "change_max", "electrons_difference_max", "sensor_difference_max"}) {
-      if (const auto v = run.results.number(key)) EXPECT_EQ(*v, 0.0) << run.case_name << " " << key;
+      if (const auto v = run.results.number(key)) {
+        EXPECT_EQ(*v, 0.0) << run.case_name << " " << key;
+      }
     }
   }
 }

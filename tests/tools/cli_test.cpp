@@ -5,6 +5,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <map>
+#include <utility>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -41,6 +44,48 @@ bool mentions_non_finite(const std::string& text) {
     if (text.find(word) != std::string::npos) return true;
   }
   return false;
+}
+
+// A PNG's width and height, from its header.
+std::pair<int, int> png_size(const std::string& png) {
+  if (png.size() < 24 || png.substr(1, 3) != "PNG") return {0, 0};
+  const auto big_endian = [&](std::size_t at) {
+    int v = 0;
+    for (std::size_t i = 0; i < 4; ++i) v = v * 256 + static_cast<unsigned char>(png[at + i]);
+    return v;
+  };
+  return {big_endian(16), big_endian(20)};
+}
+
+// A CSV's rows as column -> cell (no quoted commas in the columns read:
+// quoted cells are kept whole).
+std::vector<std::map<std::string, std::string>> csv_rows(const std::string& csv) {
+  const auto cells = [](const std::string& line) {
+    std::vector<std::string> out(1);
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') {
+        quoted = !quoted;
+      } else if (c == ',' && !quoted) {
+        out.emplace_back();
+      } else {
+        out.back() += c;
+      }
+    }
+    return out;
+  };
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = cells(line);
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> row = cells(line);
+    std::map<std::string, std::string> named;
+    for (std::size_t i = 0; i < header.size() && i < row.size(); ++i) named[header[i]] = row[i];
+    rows.push_back(named);
+  }
+  return rows;
 }
 
 class Cli : public ::testing::Test {
@@ -482,8 +527,27 @@ TEST_F(Cli, CalibrateWritesItsTableFramesAndGazeMap) {
   const std::string frames = read(output_dir_ / "frames.csv");
   EXPECT_EQ(std::count(frames.begin(), frames.end(), '\n'), 5);
   EXPECT_FALSE(mentions_non_finite(frames + read(output_dir_ / "calibration.txt")));
-  EXPECT_EQ(read(output_dir_ / "gaze_error.png").substr(1, 3), "PNG");
   EXPECT_NE(out().find("gaze_error_mean"), std::string::npos);
+#ifdef PURKINJE_FIGURES
+  // The gaze map: a panel per method at the one position, each arrow
+  // scaled by its own panel's longest error (figures.json, beside it).
+  EXPECT_EQ(png_size(read(output_dir_ / "gaze_error.png")), (std::pair<int, int>{1200, 420}));
+  const json figures = json::parse(read(output_dir_ / "figures.json"));
+  const json& panels = figures["gaze_error.png"]["panels"];
+  ASSERT_EQ(panels.size(), 2u);
+  const auto rows = csv_rows(read(output_dir_ / "frames.csv"));
+  for (std::size_t m = 0; m < 2; ++m) {
+    const std::string prefix = m == 0 ? "model" : "polynomial";
+    double longest = 0;
+    for (const auto& row : rows) {
+      longest = std::max(longest, std::hypot(std::stod(row.at(prefix + "_x_mm")) - std::stod(row.at("target_x_mm")),
+                                             std::stod(row.at(prefix + "_y_mm")) - std::stod(row.at("target_y_mm"))));
+    }
+    EXPECT_NEAR(panels[m]["longest_arrow"].get<double>(), longest, 1e-9 * longest) << m;
+  }
+#else
+  EXPECT_NE(out().find("figures: not drawn"), std::string::npos) << out();
+#endif
 }
 
 TEST_F(Cli, CalibrateRefusesASceneWithoutAScreenAndBadHeadMoves) {
@@ -589,6 +653,110 @@ TEST_F(Cli, ScoresDetectionsWrittenTheWayOtherToolkitsWriteThem) {
 
   ASSERT_EQ(run("score --help"), 0);
   EXPECT_NE(out().find("(0, 0) is the centre of the top-left pixel"), std::string::npos) << out();
+}
+
+}  // namespace
+
+namespace {
+
+// The compare study end to end: the remote rig's Navarro eye against a
+// tracker's sphere, on small grids.
+TEST_F(Cli, CompareWritesItsTablesImagesAndFigures) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  ASSERT_EQ(run("compare " + scene + " -o " + quoted(output_dir_.string()) +
+                " --assumed-cornea 7.8,0 --grid 3 --gaze-grid 3 --quiet"),
+            0)
+      << err();
+  for (const char* name : {"displacements.csv", "gaze.csv", "summary.txt", "summary.json", "summary.csv",
+                           "world.png", "world.exr", "world.json", "assumed.png", "assumed.exr", "assumed.json"}) {
+    EXPECT_TRUE(fs::exists(output_dir_ / name)) << name;
+  }
+  const json summary = json::parse(read(output_dir_ / "summary.json"));
+  const auto result = [&](const std::string& case_name, const std::string& algorithm, const std::string& key) {
+    for (const json& r : summary["runs"]) {
+      if (r["case"] == case_name && r["algorithm"] == algorithm && r["results"].contains(key)) {
+        return r["results"][key].get<double>();
+      }
+    }
+    ADD_FAILURE() << case_name << " / " << algorithm << " / " << key << " missing";
+    return -1.0;
+  };
+  EXPECT_GT(result("displacement", "glint.led_left", "displacement_max"), 0.05);
+  EXPECT_GT(result("gaze: home", "model-based", "change_max"), 0.05);
+  // The polynomial believes nothing about the rig: calibrated on the same
+  // frames, it estimates the same.
+  EXPECT_EQ(result("gaze: home", "polynomial", "change_max"), 0.0);
+  EXPECT_GT(result("images", "difference (assumed - world)", "electrons_difference_max"), 0.0);
+  EXPECT_FALSE(mentions_non_finite(read(output_dir_ / "summary.txt")));
+  const auto gaze = csv_rows(read(output_dir_ / "gaze.csv"));
+  EXPECT_EQ(gaze.size(), 3u * 2 * 9);  // home and two moves, two methods, 3 x 3 targets
+  EXPECT_EQ(gaze.back().at("position"), "moved 0,0,100 mm");
+  const auto field = csv_rows(read(output_dir_ / "displacements.csv"));
+  EXPECT_EQ(field.size(), 9u * 4);  // two glints, the pupil's centre and ellipse
+#ifdef PURKINJE_FIGURES
+  EXPECT_EQ(png_size(read(output_dir_ / "displacements.png")), (std::pair<int, int>{1800, 840}));
+  EXPECT_EQ(png_size(read(output_dir_ / "gaze_change.png")), (std::pair<int, int>{1200, 1260}));
+  EXPECT_EQ(png_size(read(output_dir_ / "images.png")), (std::pair<int, int>{1500, 900}));
+  EXPECT_EQ(read(output_dir_ / "flip.gif").substr(0, 6), "GIF89a");
+  // Each panel's arrows are scaled by its own longest (figures.json, from
+  // the plot), recomputed here from the tables.
+  const json figures = json::parse(read(output_dir_ / "figures.json"));
+  std::vector<double> scales;
+  for (const json& panel : figures["gaze_change.png"]["panels"]) {
+    const std::string title = panel["title"];
+    double longest = 0;
+    for (const auto& row : gaze) {
+      if (title != row.at("method") + ", " + row.at("position")) continue;
+      longest = std::max(longest, std::hypot(std::stod(row.at("believing_assumed_x_mm")) -
+                                                 std::stod(row.at("believing_world_x_mm")),
+                                             std::stod(row.at("believing_assumed_y_mm")) -
+                                                 std::stod(row.at("believing_world_y_mm"))));
+    }
+    EXPECT_NEAR(panel["longest_arrow"].get<double>(), longest, 1e-9 * longest) << title;
+    if (longest > 0) scales.push_back(panel["arrow_scale_per_axis_unit"].get<double>());
+  }
+  ASSERT_EQ(scales.size(), 3u);  // the model-based panels; the polynomial's are empty
+  EXPECT_NE(scales[0], scales[1]);
+  EXPECT_NE(scales[0], scales[2]);
+  for (const json& panel : figures["displacements.png"]["panels"]) {
+    const std::string title = panel["title"];
+    const std::string feature = title.substr(0, title.find(':'));
+    double longest = 0;
+    for (const auto& row : field) {
+      if (row.at("feature") == feature && !row.at("displacement_px").empty()) {
+        longest = std::max(longest, std::stod(row.at("displacement_px")));
+      }
+    }
+    if (title.find("semi-axis") == std::string::npos) {
+      EXPECT_NEAR(panel["longest_arrow"].get<double>(), longest, 1e-9 * longest) << title;
+    }
+  }
+  const std::string index = read(output_dir_ / "index.md");
+  for (const char* figure : {"displacements.png", "gaze_change.png", "images.png", "flip.gif"}) {
+    EXPECT_NE(index.find(std::string("](") + figure + ")"), std::string::npos) << figure;
+  }
+#else
+  EXPECT_NE(out().find("figures: not drawn"), std::string::npos) << out();
+#endif
+}
+
+TEST_F(Cli, CompareRefusesBadOptionsAndVersionsThatCannotBeCompared) {
+  const std::string scene = quoted((kSourceDir / "assets/scenes/remote.json").string());
+  const std::string out_dir = quoted(output_dir_.string());
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-cornea 7.8"), 2);
+  EXPECT_NE(err().find("--assumed-cornea \"7.8\": must be \"R,Q\""), std::string::npos) << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-cornea 7.8,-1"), 2);
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --camera nope"), 2);
+  EXPECT_NE(err().find("has no camera of that name"), std::string::npos) << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --head-move 1,2"), 2);
+  // Versions with other lights cannot be compared.
+  EXPECT_EQ(run("compare " + scene + " " + quoted((kSourceDir / "assets/scenes/headset.json").string()) + " -o " +
+                out_dir + " --no-images"),
+            1);
+  EXPECT_NE(err().find("compare: "), std::string::npos) << err();
+  EXPECT_TRUE(output_dir_entries().empty());
+  // The output folder is a file.
+  EXPECT_EQ(run("compare " + scene + " -o " + scene), 3);
 }
 
 }  // namespace

@@ -121,10 +121,11 @@ struct CompareStudy {
 CompareStudy run_compare(const Scene& world, const Scene& assumed, const CompareStudySettings& settings = {},
                          const std::function<void()>& step = {});
 
-// Head moves that keep a rig's eye in its camera's view: sideways (the
-// camera's x) by a twelfth of the eye's distance from the first camera,
-// and away from it by a sixth (50 and 100 mm for a remote tracker at 600
-// mm, 2.5 and 5 mm for a headset's 30 mm); none without an eye or camera.
+// Head moves that keep a rig's eye in its camera's view: along the first
+// camera's x by a twelfth of the eye's distance from it (two significant
+// digits), and along its optical axis, away, by twice that (50 and 100 mm
+// for a remote tracker at 600 mm, 2.5 and 5 mm for a headset's 30 mm);
+// none without an eye or a camera.
 std::vector<std::array<double, 3>> default_head_moves(const Scene& world);
 
 // How many steps run_compare takes (for progress).

@@ -39,20 +39,4 @@ GreyImage read_grey_image(const std::filesystem::path& file, int bits);
 void write_overlay(const std::filesystem::path& file, const GreyImage& image,
                    const std::vector<EyeInCameraTruth>& views, const Detections& found);
 
-// One panel of a gaze-error map: a screen's targets and where each method
-// put each (nullopt: no estimate), e.g. one head position.
-struct GazeMapPanel {
-  std::string title;
-  std::vector<ScreenPoint> targets;
-  std::vector<std::vector<std::optional<ScreenPoint>>> estimates;  // per method, one per target
-};
-
-// The gaze error over the screen: for each panel the screen's outline,
-// each target as a dot and an arrow from it to each method's estimate, in
-// the methods' colours (red, blue, then others), the arrows scaled by
-// `magnify` (0: the largest 1-2-5 step that keeps the longest within 60
-// px; shown in the legend). Panels side by side. PNG, all or nothing.
-void write_gaze_map(const std::filesystem::path& file, const Screen& screen, const std::vector<std::string>& methods,
-                    const std::vector<GazeMapPanel>& panels, double magnify = 0);
-
 }  // namespace purkinje::trackers

@@ -1,0 +1,210 @@
+// `purkinje compare`: the compare study (studies/compare.h) on a world
+// scene and an assumed version of it, its tables, images and figures
+// written. Documented in docs/cli.md and docs/compare.md.
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli.h"
+#include "figures.h"
+#include "progress.h"
+#include "purkinje/models/output_file.h"
+#include "purkinje/models/scene_file.h"
+#include "purkinje/studies/compare.h"
+#include "purkinje/studies/simulation.h"
+
+namespace purkinje::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CompareRequest {
+  std::string world_file, assumed_file;  // the assumed version: the world's file when not given
+  std::string output_dir;
+  studies::CompareStudySettings settings;
+  std::string camera;                       // by name; empty: the first
+  std::string assumed_cornea_text;          // as given: "R,Q"
+  std::vector<std::string> head_move_texts; // as given: "x,y,z" in mm
+  bool no_calibration = false, no_images = false, no_figures = false, quiet = false;
+};
+
+// "a,b,c" as numbers, or a usage error naming the option and its rule.
+template <std::size_t N>
+std::array<double, N> numbers(const std::string& option, const std::string& text, const std::string& rule) {
+  std::array<double, N> v{};
+  std::istringstream in(text);
+  for (std::size_t i = 0; i < N; ++i) {
+    char comma = ',';
+    if ((i > 0 && !(in >> comma)) || comma != ',' || !(in >> v[i]) || !std::isfinite(v[i])) {
+      throw CommandError(kUsageError, option + " \"" + text + "\": " + rule);
+    }
+  }
+  if (!in.eof()) throw CommandError(kUsageError, option + " \"" + text + "\": " + rule);
+  return v;
+}
+
+// The assumed eye with one refracting surface of apex radius R and
+// asphericity Q and the keratometric index: the classic tracker's cornea.
+void assume_cornea(Scene& scene, const std::array<double, 2>& c) {
+  for (Eye& eye : scene.eyes) {
+    EyeModel model = eye.model();
+    model.anterior_cornea = {c[0], c[1]};
+    model.posterior_cornea.reset();
+    model.aqueous_index = 1.3375;
+    Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
+    changed.set_appearance(eye.appearance());
+    eye = changed;
+  }
+}
+
+const std::vector<std::string> kDataFiles = {"displacements.csv", "gaze.csv",    "summary.txt", "summary.json",
+                                             "summary.csv",       "world.png",   "world.exr",   "world.json",
+                                             "assumed.png",       "assumed.exr", "assumed.json"};
+const std::vector<std::string> kFigureFiles = {"displacements.png", "gaze_change.png", "images.png",
+                                               "flip.gif",          "figures.json",    "index.md"};
+
+int run_compare(CompareRequest request) {
+  studies::CompareStudySettings& settings = request.settings;
+  std::vector<std::string> outputs = kDataFiles;
+  outputs.insert(outputs.end(), kFigureFiles.begin(), kFigureFiles.end());
+  std::vector<fs::path> inputs = {request.world_file};
+  if (!request.assumed_file.empty()) inputs.push_back(request.assumed_file);
+  refuse(check_output_folder(request.output_dir, {}, outputs, inputs));
+  const Scene world = load_scene(request.world_file);
+  Scene assumed = request.assumed_file.empty() ? world : load_scene(request.assumed_file);
+  if (!request.assumed_cornea_text.empty()) {
+    const auto c = numbers<2>("--assumed-cornea", request.assumed_cornea_text,
+                              "must be \"R,Q\" with the apex radius R in (0, 100) mm and the asphericity Q in (-1, 10)");
+    if (!(c[0] > 0 && c[0] < 100) || !(c[1] > -1 && c[1] < 10)) {
+      throw CommandError(kUsageError, "--assumed-cornea \"" + request.assumed_cornea_text +
+                                          "\": must be \"R,Q\" with the apex radius R in (0, 100) mm and the "
+                                          "asphericity Q in (-1, 10)");
+    }
+    assume_cornea(assumed, c);
+  }
+  if (!request.camera.empty()) {
+    settings.field.camera = -1;
+    for (std::size_t i = 0; i < world.cameras.size(); ++i) {
+      if (world.cameras[i].name() == request.camera) settings.field.camera = static_cast<int>(i);
+    }
+    if (settings.field.camera < 0) {
+      throw CommandError(kUsageError, "--camera \"" + request.camera + "\": " + request.world_file +
+                                          " has no camera of that name");
+    }
+  }
+  if (request.head_move_texts.empty()) {
+    settings.calibration.head_moves = studies::default_head_moves(world);
+  }
+  for (const std::string& move : request.head_move_texts) {
+    settings.calibration.head_moves.push_back(
+        numbers<3>("--head-move", move, "must be three numbers \"x,y,z\" in mm"));
+  }
+  settings.calibrate = !request.no_calibration;
+  settings.images = !request.no_images;
+  studies::CompareStudy study;
+  {
+    Progress progress("compare", studies::compare_steps(world, settings), request.quiet);
+    study = studies::run_compare(world, assumed, settings, [&] { progress.step(); });
+  }
+  const fs::path dir(request.output_dir);
+  const std::string text = studies::simulation_text(study.summary);
+  writing([&] {
+    create_output_folder(dir);
+    FileSet files;
+    const auto add_text = [&](const std::string& name, const std::string& content) {
+      files.add(dir / name, [content](const fs::path& temporary) { write_bytes(temporary, content); });
+    };
+    add_text("displacements.csv", studies::displacement_csv(study.field));
+    if (!study.gaze.empty()) add_text("gaze.csv", studies::gaze_change_csv(study.gaze));
+    if (study.world_image) {
+      renderer::add_render(files, dir, "world", world, *study.world_image, settings.render);
+      renderer::add_render(files, dir, "assumed", assumed, *study.assumed_image, settings.render);
+    }
+    add_text("summary.json", studies::simulation_json(study.summary));
+    add_text("summary.csv", studies::simulation_csv(study.summary));
+    add_text("summary.txt", text);  // last: in place only when all the others are
+    files.commit();
+  });
+  std::optional<std::string> no_figures;
+  if (request.no_figures) {
+    no_figures = "--no-figures";
+  } else {
+    writing([&] { no_figures = draw_figures("compare", dir); });
+  }
+  std::cout << text << "\nwrote " << (dir / "summary.txt").string() << ", summary.json, summary.csv, displacements.csv"
+            << (study.gaze.empty() ? "" : ", gaze.csv")
+            << (study.world_image ? ", world and assumed .png, .exr and .json" : "") << "\n"
+            << (no_figures ? "figures: not drawn: " + *no_figures
+                           : std::string("figures: displacements.png") + (study.gaze.empty() ? "" : ", gaze_change.png") +
+                                 (study.world_image ? ", images.png, flip.gif" : "") + ", figures.json; index.md")
+            << "\n";
+  return kOk;
+}
+
+}  // namespace
+
+Command add_compare_command(CLI::App& app) {
+  auto request = std::make_shared<CompareRequest>();
+  studies::CompareStudySettings& s = request->settings;
+  CLI::App* compare = app.add_subcommand(
+      "compare", "Compare a world rig with a version the tracker assumes: feature displacements, gaze cost, images");
+  compare->footer(std::string("WORLD is the rig as it is; ASSUMED (default: WORLD) a version of it that\n"
+                              "differs in anything (cornea, kappa, a camera's distortion, an LED moved), or\n"
+                              "--assumed-cornea changes its eye. Over a grid of gaze targets both eyes fixate\n"
+                              "the same target: each glint and the pupil's displacement in the image; both\n"
+                              "tracker methods calibrated on the world's exact features, believing the world\n"
+                              "and believing the assumed version: the gaze change at home and after head\n"
+                              "moves; both versions rendered with one seed. Writes DIR/summary.txt (.json,\n"
+                              ".csv), displacements.csv, gaze.csv, world/assumed .png/.exr/.json, and the\n"
+                              "figures with index.md (docs/compare.md).\n\n") +
+                  kExitCodes);
+  compare->add_option("WORLD", request->world_file, "Scene file: the rig as it is")->required();
+  compare->add_option("ASSUMED", request->assumed_file, "Scene file: the rig as the tracker assumes it");
+  compare->add_option("-o,--output", request->output_dir, "Output folder (created if missing)")->required();
+  compare->add_option("--assumed-cornea", request->assumed_cornea_text,
+                      "The assumed eye's cornea as \"R,Q\": one refracting surface of apex radius R (mm)\n"
+                      "and asphericity Q with the keratometric index 1.3375 (e.g. 7.8,0: the classic sphere)");
+  compare->add_option("--grid", s.field.grid, "Displacement field: N x N targets over the screen (or the cap)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  compare->add_option("--cap", s.field.cap_deg, "Without a screen: gaze turns up to this many degrees")
+      ->check(kFinite)
+      ->check(CLI::Range(1e-3, 60.0))
+      ->capture_default_str();
+  compare->add_option("--camera", request->camera, "The camera both versions are seen by (default: the first)");
+  compare->add_option("--gaze-grid", s.calibration.grid, "Gaze test targets: N x N over the screen")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  compare->add_option("--calibration-grid", s.calibration.calibration_grid,
+                      "Calibration targets: N x N over the screen")
+      ->check(CLI::Range(3, 16))
+      ->capture_default_str();
+  compare->add_option("--head-move", request->head_move_texts,
+                      "A test position beside the world's, as the eye's move \"x,y,z\" in mm (repeatable;\n"
+                      "default: sideways a twelfth and away a sixth of the eye's distance from the camera)");
+  compare->add_option("--glint-noise", s.calibration.glint_noise_px,
+                      "The glint noise (s.d., px) the tracker's reported uncertainty assumes (default 0.05)")
+      ->check(kFinite)
+      ->check(CLI::Range(1e-6, 10.0));
+  compare->add_option("--pupil-noise", s.calibration.pupil_noise_px,
+                      "The pupil noise (s.d., px) the tracker's reported uncertainty assumes (default 0.05)")
+      ->check(kFinite)
+      ->check(CLI::Range(1e-6, 10.0));
+  compare->add_option("--samples", s.render.samples_per_pixel, "Camera rays per pixel of both renders")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  compare->add_option("--seed", s.render.seed, "Seed of both renders")->check(kSeed)->capture_default_str();
+  compare->add_flag("--no-calibration", request->no_calibration, "No calibration: displacements and images only");
+  compare->add_flag("--no-images", request->no_images, "No renders: the geometric part only");
+  compare->add_flag("--no-figures", request->no_figures, "Data files only (no matplotlib)");
+  compare->add_flag("--quiet", request->quiet, "No progress on standard error");
+  return {compare, [request] { return run_command("compare", [&] { return run_compare(*request); }); }};
+}
+
+}  // namespace purkinje::tools

@@ -49,33 +49,11 @@ std::array<double, N> numbers(const std::string& option, const std::string& text
   return v;
 }
 
-// The assumed eye with one refracting surface of apex radius R and
-// asphericity Q and the keratometric index: the classic tracker's cornea.
-void assume_cornea(Scene& scene, const std::array<double, 2>& c) {
-  for (Eye& eye : scene.eyes) {
-    EyeModel model = eye.model();
-    model.anterior_cornea = {c[0], c[1]};
-    model.posterior_cornea.reset();
-    model.aqueous_index = 1.3375;
-    Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
-    changed.set_appearance(eye.appearance());
-    eye = changed;
-  }
-}
-
-const std::vector<std::string> kDataFiles = {"displacements.csv", "gaze.csv",    "summary.txt", "summary.json",
-                                             "summary.csv",       "world.png",   "world.exr",   "world.json",
-                                             "assumed.png",       "assumed.exr", "assumed.json"};
-const std::vector<std::string> kFigureFiles = {"displacements.png", "gaze_change.png", "images.png",
-                                               "flip.gif",          "figures.json",    "index.md"};
-
 int run_compare(CompareRequest request) {
   studies::CompareStudySettings& settings = request.settings;
-  std::vector<std::string> outputs = kDataFiles;
-  outputs.insert(outputs.end(), kFigureFiles.begin(), kFigureFiles.end());
   std::vector<fs::path> inputs = {request.world_file};
   if (!request.assumed_file.empty()) inputs.push_back(request.assumed_file);
-  refuse(check_output_folder(request.output_dir, {}, outputs, inputs));
+  refuse(check_output_folder(request.output_dir, {}, studies::compare_outputs(), inputs));
   const Scene world = load_scene(request.world_file);
   Scene assumed = request.assumed_file.empty() ? world : load_scene(request.assumed_file);
   if (!request.assumed_cornea_text.empty()) {
@@ -86,7 +64,7 @@ int run_compare(CompareRequest request) {
                                           "\": must be \"R,Q\" with the apex radius R in (0, 100) mm and the "
                                           "asphericity Q in (-1, 10)");
     }
-    assume_cornea(assumed, c);
+    assumed = studies::with_one_surface_cornea(assumed, {c[0], c[1]});
   }
   if (!request.camera.empty()) {
     settings.field.camera = -1;
@@ -114,23 +92,7 @@ int run_compare(CompareRequest request) {
   }
   const fs::path dir(request.output_dir);
   const std::string text = studies::simulation_text(study.summary);
-  writing([&] {
-    create_output_folder(dir);
-    FileSet files;
-    const auto add_text = [&](const std::string& name, const std::string& content) {
-      files.add(dir / name, [content](const fs::path& temporary) { write_bytes(temporary, content); });
-    };
-    add_text("displacements.csv", studies::displacement_csv(study.field));
-    if (!study.gaze.empty()) add_text("gaze.csv", studies::gaze_change_csv(study.gaze));
-    if (study.world_image) {
-      renderer::add_render(files, dir, "world", world, *study.world_image, settings.render);
-      renderer::add_render(files, dir, "assumed", assumed, *study.assumed_image, settings.render);
-    }
-    add_text("summary.json", studies::simulation_json(study.summary));
-    add_text("summary.csv", studies::simulation_csv(study.summary));
-    add_text("summary.txt", text);  // last: in place only when all the others are
-    files.commit();
-  });
+  writing([&] { studies::write_compare(dir, world, assumed, study, settings); });
   std::optional<std::string> no_figures;
   if (request.no_figures) {
     no_figures = "--no-figures";

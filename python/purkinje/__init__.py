@@ -35,7 +35,8 @@ from ._purkinje import (
     load_dataset_spec,
     load_scene,
 )
-from ._calibration import CalibrationStudy, GazePanel, calibrate, displacement_field
+from ._calibration import CalibrationStudy, GazePanel, calibrate
+from ._compare import CompareStudy, compare, displacement_field
 from ._labels import (
     Ellipse,
     EyeLabel,
@@ -69,6 +70,8 @@ __all__ = [
     "CalibrationStudy",
     "Camera",
     "camera",
+    "compare",
+    "CompareStudy",
     "DatasetSpec",
     "DatasetSpecError",
     "detect_glints",

@@ -76,21 +76,3 @@ def calibrate(scene: Scene, *, grid: int = 8, calibration_grid: int = 3,
         tuple(tracker_cornea) if tracker_cornea is not None else None, fit_radius, fit_pupil_depth, glint_noise_px,
         pupil_noise_px, noise_frames, seed, tracker_rig, progress)
     return CalibrationStudy(json.loads(runs_json)["runs"], text, frames_csv, [_panel(*p) for p in panels])
-
-
-def displacement_field(world: Scene, assumed: Scene, *, grid: int = 9, cap_deg: float = 15.0, camera: int = 0,
-                       pupil_border_points: int = 36):
-    """Where each feature lands in `camera`'s image when the world's eye and
-    the assumed version's eye fixate the same targets (grid x grid over the
-    world's screen, or gaze turns within cap_deg of the eye's own visual
-    axis without a screen), as a pandas DataFrame: a row per target and
-    feature (each light's glint, the pupil's centre seen through the
-    cornea, its ellipse) with both statuses and pixels, du_px, dv_px,
-    displacement_px, and the ellipses' semi-axes; NaN where a value does
-    not exist. Identical versions give exactly zero. Raises ValueError for
-    versions that cannot be compared (other than one eye each, different
-    cameras or lights)."""
-    import pandas
-
-    text = _purkinje._displacement_csv(world, assumed, grid, cap_deg, camera, pupil_border_points)
-    return pandas.read_csv(io.StringIO(text), float_precision="round_trip")

@@ -22,6 +22,7 @@
 #include "purkinje/models/rotation.h"
 #include "purkinje/models/scene.h"
 #include "purkinje/renderer/render.h"
+#include "purkinje/studies/compare.h"
 #include "purkinje/trackers/scoring.h"
 
 namespace purkinje::python {
@@ -33,6 +34,14 @@ struct Rendered {
   Scene scene;
   renderer::RenderOptions options;
   renderer::RenderResult result;
+};
+
+// A compare study and what made it: its files need the scenes and the
+// render options too (write_compare).
+struct CompareRun {
+  Scene world, assumed;
+  studies::CompareStudySettings settings;
+  studies::CompareStudy study;
 };
 
 void bind_errors(py::module_& m);

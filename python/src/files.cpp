@@ -92,6 +92,13 @@ PYBIND11_MODULE(_files, m) {
           return files_dict(files);
         },
         py::arg("result"), py::arg("folder"), py::arg("stem"));
+  m.def("write_compare",
+        [](const CompareRun& run, const std::filesystem::path& folder) {
+          raise_refusal(studies::check_output_folder(folder, {}, studies::compare_outputs(), {}));
+          py::gil_scoped_release release;
+          studies::write_compare(folder, run.world, run.assumed, run.study, run.settings);
+        },
+        py::arg("run"), py::arg("folder"));
   m.def("read_exr",
         [](const std::filesystem::path& file) {
           std::vector<renderer::NamedPlane> planes;

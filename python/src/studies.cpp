@@ -66,6 +66,56 @@ void bind_studies(py::module_& m) {
         py::arg("rig"), py::arg("grid"), py::arg("calibration_grid"), py::arg("head_moves"), py::arg("tracker_cornea"),
         py::arg("fit_radius"), py::arg("fit_pupil_depth"), py::arg("glint_noise_px"), py::arg("pupil_noise_px"),
         py::arg("noise_frames"), py::arg("seed"), py::arg("tracker_rig"), py::arg("progress"));
+
+  py::class_<CompareRun, std::shared_ptr<CompareRun>>(m, "_CompareRun", "A compare study's results, for writing.");
+  m.def("_compare",
+        [](const Scene& world, const Scene& assumed, const std::optional<std::array<double, 2>>& assumed_cornea,
+           int grid, double cap_deg, int camera, int gaze_grid, int calibration_grid,
+           const std::optional<std::vector<std::array<double, 3>>>& head_moves, std::optional<double> glint_noise_px,
+           std::optional<double> pupil_noise_px, bool calibrate, bool images, int samples, std::uint64_t seed,
+           const py::object& progress) {
+          auto run = std::make_shared<CompareRun>();
+          run->world = world;
+          run->assumed = assumed_cornea
+                             ? studies::with_one_surface_cornea(assumed, {(*assumed_cornea)[0], (*assumed_cornea)[1]})
+                             : assumed;
+          studies::CompareStudySettings& s = run->settings;
+          s.field.grid = grid;
+          s.field.cap_deg = cap_deg;
+          s.field.camera = camera;
+          s.calibration.grid = gaze_grid;
+          s.calibration.calibration_grid = calibration_grid;
+          s.calibration.head_moves = head_moves ? *head_moves : studies::default_head_moves(world);
+          s.calibration.glint_noise_px = glint_noise_px;
+          s.calibration.pupil_noise_px = pupil_noise_px;
+          s.calibrate = calibrate;
+          s.images = images;
+          if (samples < 1 || samples > 4096) {
+            throw std::invalid_argument("compare: samples = " + std::to_string(samples) + ": must be from 1 to 4096");
+          }
+          s.render.samples_per_pixel = samples;
+          s.render.seed = seed;
+          const std::function<void()> step = progress_step(progress, studies::compare_steps(world, s));
+          {
+            py::gil_scoped_release release;
+            run->study = studies::run_compare(run->world, run->assumed, s, step);
+          }
+          const studies::CompareStudy& study = run->study;
+          const auto rendered = [&](const Scene& scene, const std::optional<renderer::RenderResult>& result) {
+            if (!result) return py::object(py::none());
+            return py::cast(std::make_shared<Rendered>(Rendered{scene, s.render, *result}));
+          };
+          return py::make_tuple(run, studies::displacement_csv(study.field),
+                                study.gaze.empty() ? py::object(py::none())
+                                                   : py::object(py::str(studies::gaze_change_csv(study.gaze))),
+                                studies::simulation_json(study.summary), studies::simulation_text(study.summary),
+                                study.calibration_skipped, rendered(run->world, study.world_image),
+                                rendered(run->assumed, study.assumed_image));
+        },
+        py::arg("world"), py::arg("assumed"), py::arg("assumed_cornea"), py::arg("grid"), py::arg("cap_deg"),
+        py::arg("camera"), py::arg("gaze_grid"), py::arg("calibration_grid"), py::arg("head_moves"),
+        py::arg("glint_noise_px"), py::arg("pupil_noise_px"), py::arg("calibrate"), py::arg("images"),
+        py::arg("samples"), py::arg("seed"), py::arg("progress"));
 }
 
 }  // namespace purkinje::python

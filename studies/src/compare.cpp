@@ -320,6 +320,20 @@ void summarize_images(const renderer::RenderResult& world, const renderer::Rende
 
 }  // namespace
 
+Scene with_one_surface_cornea(const Scene& scene, const Conicoid& anterior) {
+  Scene out = scene;
+  for (Eye& eye : out.eyes) {
+    EyeModel model = eye.model();
+    model.anterior_cornea = anterior;
+    model.posterior_cornea.reset();
+    model.aqueous_index = 1.3375;
+    Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
+    changed.set_appearance(eye.appearance());
+    eye = changed;
+  }
+  return out;
+}
+
 CalibrationSettings CompareStudySettings::default_calibration() {
   CalibrationSettings s;
   s.grid = 9;

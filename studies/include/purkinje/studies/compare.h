@@ -10,6 +10,7 @@
 // both versions' images. Documented in docs/compare.md.
 
 #include <array>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -66,6 +67,11 @@ DisplacementField displacement_field(const Scene& world, const Scene& assumed, c
 // pixels, the displacement and its length, and the ellipses' centres and
 // semi-axes (pupil_ellipse); empty cells where a value does not exist.
 std::string displacement_csv(const DisplacementField& field);
+
+// The scene with each eye's cornea one refracting surface, `anterior`,
+// with the keratometric index 1.3375 behind it (the classic tracker's
+// cornea), each eye's rotation centre, optical axis and appearance kept.
+Scene with_one_surface_cornea(const Scene& scene, const Conicoid& anterior);
 
 struct CompareStudySettings {
   CompareSettings field;
@@ -130,6 +136,19 @@ std::vector<std::array<double, 3>> default_head_moves(const Scene& world);
 
 // How many steps run_compare takes (for progress).
 std::size_t compare_steps(const Scene& world, const CompareStudySettings& settings);
+
+// The files write_compare writes, and those purkinje.figures adds: what
+// an output check names.
+std::vector<std::string> compare_outputs();
+
+// Writes the study into `dir` all-or-nothing (models/output_file.h):
+// summary.txt, .json and .csv, displacements.csv, gaze.csv (when it
+// calibrated), and both versions' world/assumed .png, .exr and .json (when
+// it rendered; `settings` as run). Throws OutputError naming the file.
+// (Its own source file: the renderer's image files need OpenImageIO,
+// which the study itself does not.)
+void write_compare(const std::filesystem::path& dir, const Scene& world, const Scene& assumed,
+                   const CompareStudy& study, const CompareStudySettings& settings);
 
 // A row per head position, method and target: the target, both estimates,
 // both errors and the change (deg); empty cells where there is none.

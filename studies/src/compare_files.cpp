@@ -1,0 +1,37 @@
+// The compare study's files: see compare.h.
+
+#include <string>
+#include <vector>
+
+#include "purkinje/models/output_file.h"
+#include "purkinje/studies/compare.h"
+
+namespace purkinje::studies {
+
+std::vector<std::string> compare_outputs() {
+  return {"displacements.csv", "gaze.csv",          "summary.txt",     "summary.json", "summary.csv",
+          "world.png",         "world.exr",         "world.json",      "assumed.png",  "assumed.exr",
+          "assumed.json",      "displacements.png", "gaze_change.png", "images.png",   "flip.gif",
+          "figures.json",      "index.md"};
+}
+
+void write_compare(const std::filesystem::path& dir, const Scene& world, const Scene& assumed,
+                   const CompareStudy& study, const CompareStudySettings& settings) {
+  create_output_folder(dir);
+  FileSet files;
+  const auto add_text = [&](const std::string& name, const std::string& content) {
+    files.add(dir / name, [content](const std::filesystem::path& temporary) { write_bytes(temporary, content); });
+  };
+  add_text("displacements.csv", displacement_csv(study.field));
+  if (!study.gaze.empty()) add_text("gaze.csv", gaze_change_csv(study.gaze));
+  if (study.world_image && study.assumed_image) {
+    renderer::add_render(files, dir, "world", world, *study.world_image, settings.render);
+    renderer::add_render(files, dir, "assumed", assumed, *study.assumed_image, settings.render);
+  }
+  add_text("summary.json", simulation_json(study.summary));
+  add_text("summary.csv", simulation_csv(study.summary));
+  add_text("summary.txt", simulation_text(study.summary));  // last: in place only when all the others are
+  files.commit();
+}
+
+}  // namespace purkinje::studies

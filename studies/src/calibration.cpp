@@ -338,7 +338,7 @@ SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings&
 void score_position(const Scene& rig, const Scene& believed, const std::vector<Frame>& tests, std::size_t p,
                     const std::string& name, const trackers::ModelGazeCalibration& model,
                     const trackers::PolynomialGaze& polynomial, const trackers::FeatureNoise& noise,
-                    std::ostream& csv, CalibrationStudy& out) {
+                    const CalibrationSettings& settings, std::ostream& csv, CalibrationStudy& out) {
   // The tracker estimates with what it believes; the errors are the
   // world's: its screen, where the eye really is.
   const Camera& camera = believed.cameras.front();
@@ -360,8 +360,9 @@ void score_position(const Scene& rig, const Scene& believed, const std::vector<F
         << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
     std::optional<ScreenPoint> by_model, by_polynomial;
     if (f.found) {
-      const trackers::ModelGaze g = trackers::estimate_model_gaze(camera, believed.illuminators, *f.found,
-                                                                  model.model, believed_screen, nominal_cornea, noise);
+      const trackers::ModelGaze g = trackers::estimate_model_gaze(
+          camera, believed.illuminators, *f.found, model.model, believed_screen, nominal_cornea,
+          settings.propagate_uncertainty ? std::optional<trackers::FeatureNoise>(noise) : std::nullopt);
       // The cornea's error along the camera's line of sight (depth) and
       // across it, on two fixed axes: the camera's x and y made
       // perpendicular to the line of sight. Each is checked against its
@@ -559,7 +560,7 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
   model_settings.fit_cornea_radius = settings.fit_radius;
   model_settings.fit_pupil_depth = settings.fit_pupil_depth;
   model_settings.noise = noise;
-  model_settings.propagate_noise = true;
+  model_settings.propagate_noise = settings.propagate_uncertainty;
   const trackers::ModelGazeCalibration model = trackers::calibrate_model_gaze(
       camera, believed.illuminators, features, targets, nominal, nominal_cornea, model_settings);
   const trackers::PolynomialGaze polynomial = trackers::PolynomialGaze::calibrate(features, screen_targets);
@@ -587,7 +588,8 @@ CalibrationStudy run_calibration(const Scene& rig, const CalibrationSettings& se
          "polynomial_y_mm,polynomial_error_deg\n";
   try {
     for (std::size_t p = 0; p < positions.size(); ++p) {
-      score_position(rig, believed, frames.tests, p, positions[p].first, model, polynomial, noise, csv, out);
+      score_position(rig, believed, frames.tests, p, positions[p].first, model, polynomial, noise, settings, csv,
+                     out);
     }
   } catch (const std::exception& error) {
     throw std::runtime_error(std::string("while scoring: ") + error.what());

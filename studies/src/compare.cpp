@@ -225,6 +225,8 @@ void summarize_field(const DisplacementField& field, std::vector<SimulationRun>&
       length.write(r, "displacement_", "px");
       r.add("displacement_mean_u", du / static_cast<double>(length.n), "px");
       r.add("displacement_mean_v", dv / static_cast<double>(length.n), "px");
+    }
+    if (length.n > 0 && length.max > 0) {
       const FieldPoint& at = field.points[length.max_at];
       r.add("displacement_max_at", {at.x, at.y}, unit);
     }
@@ -266,7 +268,7 @@ void summarize_gaze(const CompareStudy& study, std::vector<SimulationRun>& out) 
       baseline.write(r, "error_believing_world_", "deg");
       assumed.write(r, "error_believing_assumed_", "deg");
       change.write(r, "change_", "deg");
-      if (change.n > 0) {
+      if (change.n > 0 && change.max > 0) {
         const ScreenPoint& at = study.gaze[change.max_at].target;
         r.add("change_max_at", {at.x_mm, at.y_mm}, "mm");
       }
@@ -374,6 +376,7 @@ CompareStudy run_compare(const Scene& world, const Scene& assumed, const Compare
   } else {
     CalibrationSettings believing_world = settings.calibration;
     believing_world.tracker_rig.reset();
+    believing_world.propagate_uncertainty = false;  // not reported: the baseline's errors are what count
     CalibrationSettings believing_assumed = settings.calibration;
     believing_assumed.tracker_rig = assumed;
     // A tracker believes a screen: the world's, where the assumed version has none.

@@ -605,7 +605,7 @@ TEST_F(Cli, AMistypedSubcommandOrOptionGetsDidYouMean) {
   EXPECT_EQ(run("rendr scene.json"), 2);
   EXPECT_NE(err().find("unknown subcommand 'rendr'; did you mean 'render'?"), std::string::npos) << err();
   EXPECT_EQ(run("frobnicate"), 2);
-  EXPECT_NE(err().find("unknown subcommand 'frobnicate' (subcommands: truth render track score calibrate generate merge)"),
+  EXPECT_NE(err().find("unknown subcommand 'frobnicate' (subcommands: truth render track score calibrate compare generate merge)"),
             std::string::npos)
       << err();
   EXPECT_EQ(run("render --seeed 1 scene.json -o out"), 2);

@@ -43,6 +43,11 @@ struct CalibrationSettings {
   // glint and pupil noise, or FeatureNoise's defaults; the errors are the
   // models' alone. What the compare study's geometric part runs.
   bool exact_features = false;
+  // false: no uncertainty propagated from the feature noise to the
+  // calibration and the estimates (each takes a dozen solves more); the
+  // calibration's from its residuals' scatter, no shares within 3 s.d.
+  // The compare study's baseline, whose uncertainty it does not report.
+  bool propagate_uncertainty = true;
   // The rig as the tracker believes it (the compare study's assumed
   // version): its camera, lights, screen and eye (the eye's anatomy and
   // where it sits; tracker_cornea still overrides the cornea), while the

@@ -32,7 +32,11 @@ struct CompareRequest {
   std::string assumed_cornea_text;          // as given: "R,Q"
   std::vector<std::string> head_move_texts; // as given: "x,y,z" in mm
   bool no_calibration = false, no_images = false, no_figures = false, quiet = false;
+  std::string sweep_text;  // as given: "NAME=FROM:TO:STEPS"
+  studies::SweepSettings sweep;
 };
+
+
 
 // "a,b,c" as numbers, or a usage error naming the option and its rule.
 template <std::size_t N>
@@ -49,7 +53,57 @@ std::array<double, N> numbers(const std::string& option, const std::string& text
   return v;
 }
 
+// --sweep "NAME=FROM:TO:STEPS" into the sweep's settings.
+void read_sweep(CompareRequest& request) {
+  const std::string& text = request.sweep_text;
+  const std::string rule = "must be \"NAME=FROM:TO:STEPS\", e.g. cornea_asphericity=-0.5:0:11";
+  const std::size_t equals = text.find('=');
+  if (equals == std::string::npos) throw CommandError(kUsageError, "--sweep \"" + text + "\": " + rule);
+  request.sweep.parameter = text.substr(0, equals);
+  std::istringstream in(text.substr(equals + 1));
+  char colon1 = 0, colon2 = 0;
+  if (!(in >> request.sweep.from >> colon1 >> request.sweep.to >> colon2 >> request.sweep.steps) || colon1 != ':' ||
+      colon2 != ':' || !in.eof()) {
+    throw CommandError(kUsageError, "--sweep \"" + text + "\": " + rule);
+  }
+}
+
+int run_sweep(CompareRequest request) {
+  read_sweep(request);
+  if (!request.assumed_file.empty() || !request.assumed_cornea_text.empty() || request.no_images) {
+    throw CommandError(kUsageError, "--sweep: the assumed versions are the world with the parameter swept: no "
+                                    "ASSUMED, --assumed-cornea or --no-images with it");
+  }
+  refuse(check_output_folder(request.output_dir, {}, studies::sweep_outputs(), {request.world_file}));
+  const Scene world = load_scene(request.world_file);
+  studies::CompareStudySettings& settings = request.settings;
+  if (request.head_move_texts.empty()) settings.calibration.head_moves = studies::default_head_moves(world);
+  for (const std::string& move : request.head_move_texts) {
+    settings.calibration.head_moves.push_back(numbers<3>("--head-move", move, "must be three numbers \"x,y,z\" in mm"));
+  }
+  settings.calibrate = !request.no_calibration;
+  // A value the eye refuses is named before any work.
+  for (const double v : {request.sweep.from, request.sweep.to}) studies::with_parameter(world, request.sweep.parameter, v);
+  studies::Sweep sweep;
+  {
+    Progress progress("compare --sweep", studies::sweep_steps(world, settings, request.sweep), request.quiet);
+    sweep = studies::run_sweep(world, settings, request.sweep, [&] { progress.step(); });
+  }
+  const fs::path dir(request.output_dir);
+  writing([&] { studies::write_sweep(dir, sweep); });
+  std::optional<std::string> no_figures;
+  if (request.no_figures) {
+    no_figures = "--no-figures";
+  } else {
+    writing([&] { no_figures = draw_figures("sweep", dir); });
+  }
+  std::cout << studies::sweep_json(sweep) << "\nwrote " << (dir / "sweep.csv").string() << " and sweep.json\n"
+            << (no_figures ? "figures: not drawn: " + *no_figures : std::string("figures: sweep.png; index.md")) << "\n";
+  return kOk;
+}
+
 int run_compare(CompareRequest request) {
+  if (!request.sweep_text.empty()) return run_sweep(std::move(request));
   studies::CompareStudySettings& settings = request.settings;
   std::vector<fs::path> inputs = {request.world_file};
   if (!request.assumed_file.empty()) inputs.push_back(request.assumed_file);
@@ -162,6 +216,17 @@ Command add_compare_command(CLI::App& app) {
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   compare->add_option("--seed", s.render.seed, "Seed of both renders")->check(kSeed)->capture_default_str();
+  std::string parameters;
+  for (const studies::SweepParameter& p : studies::sweep_parameters()) {
+    parameters += "\n  " + p.name + (p.unit.empty() ? "" : " (" + p.unit + ")") + ": " + p.meaning;
+  }
+  compare->add_option("--sweep", request->sweep_text,
+                      "Sweep one parameter of the assumed version, \"NAME=FROM:TO:STEPS\" (e.g.\n"
+                      "cornea_asphericity=-0.5:0:11); writes sweep.csv, sweep.json, sweep.png. NAME:" + parameters);
+  compare->add_option("--noise-frames", request->sweep.noise_frames,
+                      "Sweep: renders of the world that measure the detectors' noise floor (0: none)")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
   compare->add_flag("--no-calibration", request->no_calibration, "No calibration: displacements and images only");
   compare->add_flag("--no-images", request->no_images, "No renders: the geometric part only");
   compare->add_flag("--no-figures", request->no_figures, "Data files only (no matplotlib)");

@@ -36,7 +36,7 @@ from ._purkinje import (
     load_scene,
 )
 from ._calibration import CalibrationStudy, GazePanel, calibrate
-from ._compare import CompareStudy, compare, displacement_field
+from ._compare import CompareStudy, Sweep, compare, displacement_field, sweep, sweep_parameters
 from ._labels import (
     Ellipse,
     EyeLabel,
@@ -117,6 +117,9 @@ __all__ = [
     "Screen",
     "screen",
     "Sensor",
+    "Sweep",
+    "sweep",
+    "sweep_parameters",
     "track_set",
     "Tracker",
     "truth",

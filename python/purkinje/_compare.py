@@ -81,6 +81,56 @@ def compare(world: Scene, assumed: Optional[Scene] = None, *, assumed_cornea: Op
                         json.loads(summary)["runs"], text, skipped, world_image, assumed_image, run)
 
 
+@dataclass(frozen=True)
+class Sweep:
+    """What `purkinje compare --sweep` writes, as data: `table` a pandas
+    DataFrame with a row per value, subject and quantity (sweep.csv:
+    value, subject, quantity, mean, rms, max, unit), `about` the parameter,
+    its unit and meaning, the values and the noise floor (sweep.json).
+    `write(folder)` writes the command's files and figure."""
+
+    table: Any
+    about: Dict[str, Any]
+    _run: Any
+
+    def write(self, folder: Union[str, "os.PathLike[str]"], *, figures: bool = True) -> List[Path]:
+        """sweep.csv and sweep.json into `folder` (created if missing), and
+        with `figures` sweep.png, figures.json and index.md. Returns the
+        files written; raises OutputError when they cannot be written."""
+        from . import _files
+
+        folder = Path(folder)
+        _files.write_sweep(self._run, os.fspath(folder))
+        written = [folder / "sweep.csv", folder / "sweep.json"]
+        if figures:
+            from .figures import sweep_figures
+
+            written += sweep_figures(folder)
+        return written
+
+
+def sweep_parameters() -> List[Tuple[str, str, str]]:
+    """The parameters `sweep` can change: (name, unit, meaning) each."""
+    return [tuple(p) for p in _purkinje._sweep_parameters()]
+
+
+def sweep(world: Scene, parameter: str, start: float, stop: float, steps: int = 11, *, noise_frames: int = 16,
+          seed: int = 1, grid: int = 9, cap_deg: float = 15.0, camera: int = 0, gaze_grid: int = 9,
+          calibration_grid: int = 3, head_moves: Optional[Sequence[Sequence[float]]] = None,
+          glint_noise_px: Optional[float] = None, pupil_noise_px: Optional[float] = None, calibrate: bool = True,
+          progress: Optional[Callable[[int, int], None]] = None) -> Sweep:
+    """`purkinje compare --sweep PARAMETER=START:STOP:STEPS` on `world`: for
+    each value the study (no images) on the world against the world with
+    that parameter (`sweep_parameters()`), and the noise floor measured on
+    `noise_frames` renders. Raises ValueError for an unknown parameter, a
+    value the eye cannot have, or settings out of range."""
+    run, table, about = _purkinje._sweep(
+        world, parameter, start, stop, steps, noise_frames, seed, grid, cap_deg, camera, gaze_grid,
+        calibration_grid, [tuple(m) for m in head_moves] if head_moves is not None else None, glint_noise_px,
+        pupil_noise_px, calibrate, progress)
+    return Sweep(_table(table), json.loads(about), run)
+
+
 def displacement_field(world: Scene, assumed: Scene, *, grid: int = 9, cap_deg: float = 15.0, camera: int = 0,
                        pupil_border_points: int = 36):
     """Where each feature lands in `camera`'s image when the world's eye and

@@ -2,9 +2,9 @@
 from the files the studies write (docs/compare.md says why matplotlib).
 
 `purkinje calibrate` and `purkinje compare` run this module after writing
-their data: ``python3 -m purkinje.figures calibration|compare FOLDER``.
-From Python, `calibration_figures(folder)` and `compare_figures(folder)`
-draw the same. Every arrow panel has its own scale, given by a key arrow
+their data: ``python3 -m purkinje.figures calibration|compare|sweep
+FOLDER``. From Python, `calibration_figures(folder)`,
+`compare_figures(folder)` and `sweep_figures(folder)` draw the same. Every arrow panel has its own scale, given by a key arrow
 in the panel and written, with each panel's colour range, to
 ``figures.json`` beside the figures, so that a test (or a reader) can
 check what a figure shows.
@@ -364,11 +364,67 @@ def compare_figures(folder: PathLike) -> List[Path]:
     return [folder / name for name in figures] + [folder / "figures.json", folder / "index.md"]
 
 
+def sweep_figures(folder: PathLike) -> List[Path]:
+    """`purkinje compare --sweep`'s sweep.png from sweep.csv and sweep.json:
+    against the swept parameter, each glint's displacement, the pupil's,
+    and the model-based gaze change per head position (mean dashed, largest
+    solid), each panel with the noise floor drawn as a grey band from 0 (the
+    detectors' measured RMS error per axis; the gaze s.d. the tracker
+    reports with that noise). Also figures.json and index.md."""
+    folder = Path(folder)
+    plt = _pyplot()
+    table = _read_csv(folder / "sweep.csv")
+    about = json.loads((folder / "sweep.json").read_text())
+    floor = about.get("noise_floor", {})
+    name = about["parameter"] + (f" ({about['unit']})" if about.get("unit") else "")
+    panels_spec = [
+        ("glints", "displacement (px)", lambda t: (t["quantity"] == "displacement") & t["subject"].str.startswith("glint."),
+         floor.get("glint_px"), "glint detector noise (RMS per axis)"),
+        ("pupil", "displacement (px)", lambda t: (t["quantity"] == "displacement") & t["subject"].str.startswith("pupil"),
+         floor.get("pupil_px"), "pupil detector noise (RMS per axis)"),
+        ("model-based gaze", "gaze change (deg)",
+         lambda t: (t["quantity"] == "gaze_change") & t["subject"].str.startswith("model-based"),
+         floor.get("gaze_deg"), "reported gaze s.d. at home (median)"),
+    ]
+    fig, axes = plt.subplots(1, 3, figsize=(18, 5), constrained_layout=True)
+    drawn = []
+    for ax, (title, ylabel, select, band, band_label) in zip(axes, panels_spec):
+        part = table[select(table)]
+        curves = []
+        for k, (subject, rows) in enumerate(part.groupby("subject", sort=False)):
+            colour = f"C{k}"
+            ax.plot(rows["value"], rows["max"], "-o", color=colour, markersize=3, label=f"{subject}: largest")
+            ax.plot(rows["value"], rows["mean"], "--", color=colour, label=f"{subject}: mean")
+            curves.append({"subject": subject, "largest": float(rows["max"].max())})
+        if band is not None:
+            ax.axhspan(0, band, color="grey", alpha=0.3, label=f"{band_label}: {band:.3g}")
+        ax.set_xlabel(name)
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, loc="left", fontsize=10)
+        ax.set_ylim(bottom=0)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+        drawn.append({"title": title, "curves": curves, "noise_band": band})
+    fig.suptitle(f"Sweep of the assumed version's {about['parameter']}: {about.get('meaning', '')}")
+    _save(fig, folder / "sweep.png")
+    plt.close(fig)
+    _write_figures_json(folder, {"sweep.png": {"panels": drawn}})
+    lines = [f"# Sweep: {name}", "", about.get("meaning", ""), "",
+             "The numbers are in sweep.csv (a row per value, subject and quantity) and sweep.json.", "",
+             "![sweep.png](sweep.png)", ""]
+    path = folder / "index.md"
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text("\n".join(lines))
+    os.replace(temporary, path)
+    return [folder / "sweep.png", folder / "figures.json", folder / "index.md"]
+
+
 def main(argv: Sequence[str]) -> int:
-    if len(argv) != 2 or argv[0] not in ("calibration", "compare"):
-        print("usage: python3 -m purkinje.figures calibration|compare FOLDER", file=sys.stderr)
+    draws = {"calibration": calibration_figures, "compare": compare_figures, "sweep": sweep_figures}
+    if len(argv) != 2 or argv[0] not in draws:
+        print("usage: python3 -m purkinje.figures calibration|compare|sweep FOLDER", file=sys.stderr)
         return 2
-    draw = calibration_figures if argv[0] == "calibration" else compare_figures
+    draw = draws[argv[0]]
     try:
         draw(argv[1])
     except (OSError, KeyError, ValueError) as error:

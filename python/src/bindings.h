@@ -44,6 +44,11 @@ struct CompareRun {
   studies::CompareStudy study;
 };
 
+// A sweep's results, for writing.
+struct SweepRun {
+  studies::Sweep sweep;
+};
+
 void bind_errors(py::module_& m);
 void bind_scene(py::module_& m);
 void bind_render(py::module_& m);

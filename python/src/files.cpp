@@ -99,6 +99,13 @@ PYBIND11_MODULE(_files, m) {
           studies::write_compare(folder, run.world, run.assumed, run.study, run.settings);
         },
         py::arg("run"), py::arg("folder"));
+  m.def("write_sweep",
+        [](const SweepRun& run, const std::filesystem::path& folder) {
+          raise_refusal(studies::check_output_folder(folder, {}, studies::sweep_outputs(), {}));
+          py::gil_scoped_release release;
+          studies::write_sweep(folder, run.sweep);
+        },
+        py::arg("run"), py::arg("folder"));
   m.def("read_exr",
         [](const std::filesystem::path& file) {
           std::vector<renderer::NamedPlane> planes;

@@ -116,6 +116,42 @@ void bind_studies(py::module_& m) {
         py::arg("camera"), py::arg("gaze_grid"), py::arg("calibration_grid"), py::arg("head_moves"),
         py::arg("glint_noise_px"), py::arg("pupil_noise_px"), py::arg("calibrate"), py::arg("images"),
         py::arg("samples"), py::arg("seed"), py::arg("progress"));
+
+  py::class_<SweepRun, std::shared_ptr<SweepRun>>(m, "_SweepRun", "A sweep's results, for writing.");
+  m.def("_sweep_parameters", [] {
+    py::list out;
+    for (const studies::SweepParameter& p : studies::sweep_parameters()) out.append(py::make_tuple(p.name, p.unit, p.meaning));
+    return out;
+  });
+  m.def("_sweep",
+        [](const Scene& world, const std::string& parameter, double start, double stop, int steps, int noise_frames,
+           std::uint64_t seed, int grid, double cap_deg, int camera, int gaze_grid, int calibration_grid,
+           const std::optional<std::vector<std::array<double, 3>>>& head_moves, std::optional<double> glint_noise_px,
+           std::optional<double> pupil_noise_px, bool calibrate, const py::object& progress) {
+          studies::CompareStudySettings s;
+          s.field.grid = grid;
+          s.field.cap_deg = cap_deg;
+          s.field.camera = camera;
+          s.calibration.grid = gaze_grid;
+          s.calibration.calibration_grid = calibration_grid;
+          s.calibration.head_moves = head_moves ? *head_moves : studies::default_head_moves(world);
+          s.calibration.glint_noise_px = glint_noise_px;
+          s.calibration.pupil_noise_px = pupil_noise_px;
+          s.calibrate = calibrate;
+          const studies::SweepSettings sweep{parameter, start, stop, steps, noise_frames, seed};
+          for (const double v : {start, stop}) studies::with_parameter(world, parameter, v);
+          const std::function<void()> step = progress_step(progress, studies::sweep_steps(world, s, sweep));
+          auto run = std::make_shared<SweepRun>();
+          {
+            py::gil_scoped_release release;
+            run->sweep = studies::run_sweep(world, s, sweep, step);
+          }
+          return py::make_tuple(run, studies::sweep_csv(run->sweep), studies::sweep_json(run->sweep));
+        },
+        py::arg("world"), py::arg("parameter"), py::arg("start"), py::arg("stop"), py::arg("steps"),
+        py::arg("noise_frames"), py::arg("seed"), py::arg("grid"), py::arg("cap_deg"), py::arg("camera"),
+        py::arg("gaze_grid"), py::arg("calibration_grid"), py::arg("head_moves"), py::arg("glint_noise_px"),
+        py::arg("pupil_noise_px"), py::arg("calibrate"), py::arg("progress"));
 }
 
 }  // namespace purkinje::python

@@ -131,6 +131,7 @@ struct Tally {
   std::vector<double> errors_deg;
   int missing = 0;
   int within_3sd_x = 0, within_3sd_y = 0, with_sd = 0;
+  std::vector<double> sd_deg;  // each estimate's reported s.d. on the screen (RMS of both axes) as an angle at the eye
 };
 
 void add_errors(Results& r, const std::string& prefix, const Tally& t) {
@@ -148,6 +149,9 @@ void add_errors(Results& r, const std::string& prefix, const Tally& t) {
   if (t.with_sd > 0) {
     r.add(prefix + "within_3sd_screen_x", 100.0 * t.within_3sd_x / t.with_sd, "%");
     r.add(prefix + "within_3sd_screen_y", 100.0 * t.within_3sd_y / t.with_sd, "%");
+    std::vector<double> sd = t.sd_deg;
+    std::nth_element(sd.begin(), sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2), sd.end());
+    r.add(prefix + "sd_median", sd[sd.size() / 2], "deg");
   }
 }
 
@@ -165,6 +169,24 @@ trackers::GazeEyeModel tracker_eye(const Scene& rig, const CalibrationSettings& 
   nominal.refractive_index = scene_eye.posterior_cornea ? 1.3375 : scene_eye.aqueous_index;
   nominal.pupil_depth_mm = scene_eye.anterior_cornea.radius_mm - scene_eye.iris_depth_mm;
   return nominal;
+}
+
+// Frames rendered only to measure the detectors' noise: the eye at `home`
+// fixating targets uniform over the screen drawn from `target_seed`, the
+// renders seeded from `render_seed` on.
+std::vector<Frame> noise_frames_of(const Scene& rig, const Point3& home, const Tracker& tracker, int count,
+                                   std::uint64_t target_seed, std::uint64_t render_seed,
+                                   const std::function<void()>& step) {
+  const Screen& screen = *rig.screen;
+  std::mt19937_64 random(target_seed);
+  std::uniform_real_distribution<double> along(0, 1);
+  std::vector<Frame> frames;
+  for (int i = 0; i < count; ++i) {
+    const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
+    frames.push_back(frame_at(rig, home, 0, t, tracker, render_seed++, false));
+    if (step) step();
+  }
+  return frames;
 }
 
 // Every frame the study renders, read by the tracker.
@@ -195,17 +217,30 @@ RenderedFrames render_frames(const Scene& rig, const Scene& believed,
       if (step) step();
     }
   }
-  // Targets uniform over the screen, from the seed: the noise frames
-  // are neither calibration nor test frames.
-  std::mt19937_64 random(settings.seed);
-  std::uniform_real_distribution<double> along(0, 1);
   const int noise_frames = settings.exact_features ? 0 : settings.noise_frames;
-  for (int i = 0; i < noise_frames; ++i) {
-    const ScreenPoint t{along(random) * screen.width_mm, along(random) * screen.height_mm};
-    frames.noise.push_back(frame_at(rig, home, 0, t, tracker, seed++, settings.exact_features));
-    if (step) step();
-  }
+  frames.noise = noise_frames_of(rig, home, tracker, noise_frames, settings.seed, seed, step);
   return frames;
+}
+
+// The RMS of the frames' `errors`, clipped as the cornea fit rejects
+// glints (beyond 6 s.d., repeated until it settles) so that a merged glint
+// does not inflate it; `fallback` without errors; at least 1e-3 px.
+double clipped_rms(const std::vector<Frame>& frames, std::vector<double> Frame::*errors, double fallback) {
+  const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
+  std::vector<double> all;
+  for (const Frame& f : frames) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
+  double sd = INFINITY;
+  for (int round = 0; round < 20; ++round) {
+    double sum = 0;
+    std::size_t count = 0;
+    for (const double e : all) {
+      if (std::abs(e) <= clip * sd) sum += e * e, ++count;
+    }
+    const double next = count > 0 ? std::sqrt(sum / count) : fallback;
+    if (next == sd) break;
+    sd = next;
+  }
+  return std::max(1e-3, sd);
 }
 
 struct MeasuredNoise {
@@ -221,25 +256,11 @@ MeasuredNoise measure_noise(const RenderedFrames& frames, const CalibrationSetti
   // specification). The RMS error, clipped as the
   // cornea fit rejects glints (beyond 6 s.d., repeated until it settles),
   // so that a merged glint does not inflate it.
-  const double clip = trackers::CorneaFitSettings{}.reject_beyond_sd;
   const std::vector<Frame>& measured_on = frames.noise.empty() ? frames.calibration : frames.noise;
   const auto measured = [&](std::vector<double> Frame::*errors, const std::optional<double>& given,
                             double fallback) {
     if (given) return *given;
-    std::vector<double> all;
-    for (const Frame& f : measured_on) all.insert(all.end(), (f.*errors).begin(), (f.*errors).end());
-    double sd = INFINITY;
-    for (int round = 0; round < 20; ++round) {
-      double sum = 0;
-      std::size_t count = 0;
-      for (const double e : all) {
-        if (std::abs(e) <= clip * sd) sum += e * e, ++count;
-      }
-      const double next = count > 0 ? std::sqrt(sum / count) : fallback;
-      if (next == sd) break;
-      sd = next;
-    }
-    return std::max(1e-3, sd);
+    return clipped_rms(measured_on, errors, fallback);
   };
   MeasuredNoise out;
   trackers::FeatureNoise& noise = out.noise;
@@ -360,9 +381,9 @@ void score_position(const Scene& rig, const Scene& believed, const std::vector<F
         << (f.found ? 1 : 0) << ',' << rms(f.glint_errors_px) << ',' << rms(f.pupil_errors_px);
     std::optional<ScreenPoint> by_model, by_polynomial;
     if (f.found) {
-      const trackers::ModelGaze g = trackers::estimate_model_gaze(
-          camera, believed.illuminators, *f.found, model.model, believed_screen, nominal_cornea,
-          settings.propagate_uncertainty ? std::optional<trackers::FeatureNoise>(noise) : std::nullopt);
+      const trackers::ModelGaze g =
+          trackers::estimate_model_gaze(camera, believed.illuminators, *f.found, model.model, believed_screen,
+                                        nominal_cornea, noise, settings.propagate_uncertainty);
       // The cornea's error along the camera's line of sight (depth) and
       // across it, on two fixed axes: the camera's x and y made
       // perpendicular to the line of sight. Each is checked against its
@@ -408,6 +429,8 @@ void score_position(const Scene& rig, const Scene& believed, const std::vector<F
           const double sx = std::sqrt((*g.on_screen_covariance_mm2)[0]);
           const double sy = std::sqrt((*g.on_screen_covariance_mm2)[3]);
           ++model_tally.with_sd;
+          model_tally.sd_deg.push_back(
+              std::atan(std::sqrt((sx * sx + sy * sy) / 2) / distance(screen.at(f.target), f.cornea_center)) / kDegree);
           model_tally.within_3sd_x += std::abs(by_model->x_mm - f.target.x_mm) <= 3 * sx ? 1 : 0;
           model_tally.within_3sd_y += std::abs(by_model->y_mm - f.target.y_mm) <= 3 * sy ? 1 : 0;
           csv << ',' << sx << ',' << sy;
@@ -512,6 +535,29 @@ void check_calibration_rig(const Scene& rig, const std::string& rig_file, const 
                              ": the tracker's cornea must be an ellipsoid, Q in (-1, 10); give another "
                              "with --tracker-cornea R,Q");
   }
+}
+
+DetectorNoise measure_detector_noise(const Scene& rig, int frames, std::uint64_t seed,
+                                     const std::function<void()>& step) {
+  if (!rig.screen || rig.eyes.size() != 1) {
+    throw std::invalid_argument("measure_detector_noise: the rig needs a screen and one eye");
+  }
+  if (frames < 1 || frames > 10000) {
+    throw std::invalid_argument("measure_detector_noise: frames = " + std::to_string(frames) +
+                                ": must be from 1 to 10000");
+  }
+  const Tracker tracker(rig.cameras.front(), rig.illuminators, rig.eyes.front());
+  const std::vector<Frame> rendered =
+      noise_frames_of(rig, rig.eyes.front().rotation_center(), tracker, frames, seed, seed, step);
+  DetectorNoise noise;
+  noise.frames = frames;
+  for (const Frame& f : rendered) {
+    noise.glint_errors += static_cast<int>(f.glint_errors_px.size() / 2);
+    noise.pupil_errors += static_cast<int>(f.pupil_errors_px.size() / 2);
+  }
+  if (noise.glint_errors > 0) noise.glint_px = clipped_rms(rendered, &Frame::glint_errors_px, 0);
+  if (noise.pupil_errors > 0) noise.pupil_px = clipped_rms(rendered, &Frame::pupil_errors_px, 0);
+  return noise;
 }
 
 std::size_t calibration_frames(const CalibrationSettings& settings) {

@@ -10,6 +10,8 @@
 #include "purkinje/models/check.h"
 #include "purkinje/models/csv.h"
 
+#include <nlohmann/json.hpp>
+
 namespace purkinje::studies {
 namespace {
 
@@ -447,6 +449,193 @@ std::string gaze_change_csv(const std::vector<GazeChange>& gaze) {
         << '\n';
   }
   return out.str();
+}
+
+}  // namespace purkinje::studies
+
+namespace purkinje::studies {
+
+const std::vector<SweepParameter>& sweep_parameters() {
+  static const std::vector<SweepParameter> parameters = {
+      {"cornea_radius", "mm", "the anterior cornea's apex radius"},
+      {"cornea_asphericity", "", "the anterior cornea's asphericity Q"},
+      {"aqueous_index", "", "the aqueous humour's refractive index"},
+      {"iris_depth", "mm", "the iris' (and pupil's) depth behind the corneal apex"},
+      {"pupil_decentration_x", "mm", "the pupil's centre in the iris plane, eye x"},
+      {"pupil_decentration_y", "mm", "the pupil's centre in the iris plane, eye y (up)"},
+      {"kappa_horizontal", "deg", "the visual axis from the optical axis, toward eye x"},
+      {"kappa_vertical", "deg", "the visual axis from the optical axis, up"},
+      {"led_offset_x", "mm", "the first light moved along world x"},
+      {"led_offset_y", "mm", "the first light moved along world y"},
+      {"led_offset_z", "mm", "the first light moved along world z"},
+  };
+  return parameters;
+}
+
+Scene with_parameter(const Scene& world, const std::string& parameter, double value) {
+  const auto fail = [&](const std::string& rule) {
+    throw std::invalid_argument("sweep: " + parameter + " = " + check::format_number(value) + ": " + rule);
+  };
+  if (!std::isfinite(value)) fail("must be a finite number");
+  Scene out = world;
+  if (parameter.starts_with("led_offset_")) {
+    if (out.illuminators.empty()) fail("the scene has no light to move");
+    Point3& at = out.illuminators.front().position;
+    (parameter == "led_offset_x" ? at.x : parameter == "led_offset_y" ? at.y : at.z) += value;
+    if (parameter == "led_offset_x" || parameter == "led_offset_y" || parameter == "led_offset_z") return out;
+  }
+  if (world.eyes.size() != 1) fail("the scene must have one eye");
+  const Eye& eye = world.eyes.front();
+  EyeModel m = eye.model();
+  constexpr double kDeg = std::numbers::pi / 180;
+  double* field = parameter == "cornea_radius"          ? &m.anterior_cornea.radius_mm
+                  : parameter == "cornea_asphericity"   ? &m.anterior_cornea.asphericity
+                  : parameter == "aqueous_index"        ? &m.aqueous_index
+                  : parameter == "iris_depth"           ? &m.iris_depth_mm
+                  : parameter == "pupil_decentration_x" ? &m.pupil_decentration_x_mm
+                  : parameter == "pupil_decentration_y" ? &m.pupil_decentration_y_mm
+                  : parameter == "kappa_horizontal"     ? &m.kappa_horizontal_rad
+                  : parameter == "kappa_vertical"       ? &m.kappa_vertical_rad
+                                                        : nullptr;
+  if (!field) {
+    std::string known;
+    for (const SweepParameter& p : sweep_parameters()) known += (known.empty() ? "" : ", ") + p.name;
+    throw std::invalid_argument("sweep: unknown parameter \"" + parameter + "\" (known: " + known + ")");
+  }
+  if (parameter == "aqueous_index" && !(value > 1)) fail("must be more than 1");
+  const bool kappa = parameter.starts_with("kappa_");
+  if (kappa && !(std::abs(value) <= 45)) fail("must be within 45 deg");
+  const double set = kappa ? value * kDeg : value;
+  // The world's own value: the world's eye itself, bit for bit (its pose
+  // rebuilt would differ in the last bits).
+  if (*field == set) return out;
+  *field = set;
+  if (const auto problem = anatomy_problem(m)) {
+    fail("the eye's anatomy refuses it: " + problem->key + " = " + problem->value + ": " + problem->rule);
+  }
+  Eye changed = Eye::with_rotation_center(m, eye.rotation_center(), eye.optical_axis());
+  changed.set_appearance(eye.appearance());
+  out.eyes = {changed};
+  return out;
+}
+
+namespace {
+
+void check_sweep(const SweepSettings& s) {
+  const auto fail = [&](const std::string& rule) { throw std::invalid_argument("sweep: " + rule); };
+  if (s.steps < 2 || s.steps > 1000) fail("steps = " + std::to_string(s.steps) + ": must be from 2 to 1000");
+  if (!std::isfinite(s.from) || !std::isfinite(s.to) || s.from == s.to) {
+    fail("from " + check::format_number(s.from) + " to " + check::format_number(s.to) +
+         ": must be two different finite numbers");
+  }
+  if (s.noise_frames < 0 || s.noise_frames > 10000) {
+    fail("noise_frames = " + std::to_string(s.noise_frames) + ": must be from 0 to 10000");
+  }
+}
+
+double sweep_value(const SweepSettings& s, int k) {
+  // Weighted ends over the count: -0.5 to 0 in ten steps gives -0.35, not
+  // -0.35000000000000003.
+  return (s.from * (s.steps - 1 - k) + s.to * k) / (s.steps - 1);
+}
+
+}  // namespace
+
+std::size_t sweep_steps(const Scene& world, const CompareStudySettings& settings, const SweepSettings& sweep) {
+  CompareStudySettings each = settings;
+  each.images = false;
+  const bool measured = sweep.noise_frames > 0 && world.screen.has_value();
+  return (measured ? static_cast<std::size_t>(sweep.noise_frames) + compare_steps(world, each) : 0) +
+         static_cast<std::size_t>(sweep.steps) * compare_steps(world, each);
+}
+
+Sweep run_sweep(const Scene& world, const CompareStudySettings& settings, const SweepSettings& sweep,
+                const std::function<void()>& step) {
+  check_sweep(sweep);
+  Sweep out;
+  out.parameter = sweep.parameter;
+  for (const SweepParameter& p : sweep_parameters()) {
+    if (p.name == sweep.parameter) out.unit = p.unit;
+  }
+  // Every value's version first: a value refused refuses the sweep before any work.
+  std::vector<Scene> versions;
+  for (int k = 0; k < sweep.steps; ++k) {
+    out.values.push_back(sweep_value(sweep, k));
+    versions.push_back(with_parameter(world, sweep.parameter, out.values.back()));
+  }
+  CompareStudySettings each = settings;
+  each.images = false;
+  if (sweep.noise_frames > 0 && world.screen) {
+    out.noise = measure_detector_noise(world, sweep.noise_frames, sweep.seed, step);
+    if (!each.calibration.glint_noise_px && out.noise->glint_px > 0) each.calibration.glint_noise_px = out.noise->glint_px;
+    if (!each.calibration.pupil_noise_px && out.noise->pupil_px > 0) each.calibration.pupil_noise_px = out.noise->pupil_px;
+    // What that noise alone costs gaze, as the tracker reports it: the
+    // world believed as it is.
+    const CompareStudy floor = run_compare(world, world, each, step);
+    if (floor.assumed) {
+      for (const SimulationRun& run : floor.assumed->runs) {
+        if (run.case_name == "home" && run.algorithm == "model-based") {
+          out.gaze_noise_deg = run.results.number("gaze_sd_median");
+        }
+      }
+    }
+  }
+  for (const Scene& version : versions) out.summaries.push_back(run_compare(world, version, each, step).summary);
+  return out;
+}
+
+std::string sweep_csv(const Sweep& sweep) {
+  std::ostringstream out;
+  out << "value,subject,quantity,mean,rms,max,unit\n";
+  const auto cell = [](const Results& r, const std::string& key) {
+    const auto v = r.number(key);
+    return v ? check::format_number(*v) : std::string();
+  };
+  for (std::size_t k = 0; k < sweep.values.size(); ++k) {
+    const std::string value = check::format_number(sweep.values[k]);
+    for (const SimulationRun& run : sweep.summaries[k]) {
+      const Results& r = run.results;
+      if (run.case_name == "displacement") {
+        out << value << ',' << csv_cell(run.algorithm) << ",displacement," << cell(r, "displacement_mean") << ','
+            << cell(r, "displacement_rms") << ',' << cell(r, "displacement_max") << ",px\n";
+      } else if (run.case_name.starts_with("gaze: ")) {
+        const std::string subject = csv_cell(run.algorithm + ", " + run.case_name.substr(6));
+        out << value << ',' << subject << ",gaze_change," << cell(r, "change_mean") << ',' << cell(r, "change_rms")
+            << ',' << cell(r, "change_max") << ",deg\n";
+        if (r.number("believing_assumed_cornea_depth_error_mean")) {
+          out << value << ',' << subject << ",cornea_depth_error,"
+              << cell(r, "believing_assumed_cornea_depth_error_mean") << ','
+              << cell(r, "believing_assumed_cornea_depth_error_rms") << ",,mm\n";
+        }
+        if (r.number("believing_assumed_cornea_within_3sd_depth")) {
+          out << value << ',' << subject << ",cornea_within_3sd_depth,"
+              << cell(r, "believing_assumed_cornea_within_3sd_depth") << ",,,%\n";
+        }
+      }
+    }
+  }
+  return out.str();
+}
+
+std::string sweep_json(const Sweep& sweep) {
+  nlohmann::ordered_json j;
+  j["parameter"] = sweep.parameter;
+  j["unit"] = sweep.unit;
+  for (const SweepParameter& p : sweep_parameters()) {
+    if (p.name == sweep.parameter) j["meaning"] = p.meaning;
+  }
+  j["values"] = sweep.values;
+  nlohmann::ordered_json floor = nlohmann::ordered_json::object();
+  if (sweep.noise) {
+    floor["frames"] = sweep.noise->frames;
+    floor["glint_px"] = sweep.noise->glint_errors > 0 ? nlohmann::ordered_json(sweep.noise->glint_px) : nullptr;
+    floor["pupil_px"] = sweep.noise->pupil_errors > 0 ? nlohmann::ordered_json(sweep.noise->pupil_px) : nullptr;
+    floor["glint_errors"] = sweep.noise->glint_errors;
+    floor["pupil_errors"] = sweep.noise->pupil_errors;
+  }
+  floor["gaze_deg"] = sweep.gaze_noise_deg ? nlohmann::ordered_json(*sweep.gaze_noise_deg) : nullptr;
+  j["noise_floor"] = floor;
+  return j.dump(2) + "\n";
 }
 
 }  // namespace purkinje::studies

@@ -35,3 +35,18 @@ void write_compare(const std::filesystem::path& dir, const Scene& world, const S
 }
 
 }  // namespace purkinje::studies
+
+namespace purkinje::studies {
+
+std::vector<std::string> sweep_outputs() { return {"sweep.csv", "sweep.json", "sweep.png", "figures.json", "index.md"}; }
+
+void write_sweep(const std::filesystem::path& dir, const Sweep& sweep) {
+  create_output_folder(dir);
+  FileSet files;
+  const std::string csv = sweep_csv(sweep), json = sweep_json(sweep);
+  files.add(dir / "sweep.csv", [csv](const std::filesystem::path& temporary) { write_bytes(temporary, csv); });
+  files.add(dir / "sweep.json", [json](const std::filesystem::path& temporary) { write_bytes(temporary, json); });
+  files.commit();
+}
+
+}  // namespace purkinje::studies

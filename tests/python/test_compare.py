@@ -64,3 +64,26 @@ def test_versions_that_cannot_be_compared_are_refused(remote):
         purkinje.compare(remote, headset, images=False)
     with pytest.raises(ValueError, match="samples"):
         purkinje.compare(remote, samples=0)
+
+
+def test_a_sweep_from_python_writes_what_the_command_writes(remote, tmp_path):
+    names = [name for name, _, _ in purkinje.sweep_parameters()]
+    assert "cornea_asphericity" in names and "led_offset_x" in names
+    sweep = purkinje.sweep(remote, "cornea_radius", 7.6, 8.0, 3, noise_frames=2, grid=3, gaze_grid=3)
+    assert list(sweep.about["values"]) == [7.6, 7.8, 8.0]
+    glints = sweep.table[(sweep.table["quantity"] == "displacement") & sweep.table["subject"].str.startswith("glint")]
+    assert (glints.groupby("value")["max"].max() > 0).all()
+    assert sweep.about["noise_floor"]["frames"] == 2
+    sweep.write(tmp_path / "py")
+    cli("compare", Path(__file__).parents[2] / "assets/scenes/remote.json", "-o", tmp_path / "cli", "--sweep",
+        "cornea_radius=7.6:8.0:3", "--noise-frames", "2", "--grid", "3", "--gaze-grid", "3", "--quiet")
+    for name in ("sweep.csv", "sweep.json"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    assert Image.open(tmp_path / "cli" / "sweep.png").size == (1800, 500)
+    # Each panel's band is the noise floor the sweep measured.
+    figures = json.loads((tmp_path / "cli" / "figures.json").read_text())
+    bands = [panel["noise_band"] for panel in figures["sweep.png"]["panels"]]
+    floor = sweep.about["noise_floor"]
+    assert bands == [floor["glint_px"], floor["pupil_px"], floor["gaze_deg"]]
+    with pytest.raises(ValueError, match='unknown parameter "cornea_radios"'):
+        purkinje.sweep(remote, "cornea_radios", 7, 8)

@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <variant>
@@ -367,6 +369,93 @@ TEST(CompareStudy, WithoutAScreenItComparesOnACapAndSaysWhyItDidNotCalibrate) {
   EXPECT_FALSE(study.baseline);
   EXPECT_NE(study.calibration_skipped.find("screen"), std::string::npos) << study.calibration_skipped;
   EXPECT_EQ(compare_steps(world, settings), 0u);
+}
+
+// Sweeps: one parameter of the assumed version, its values from the
+// world's own on.
+TEST(CompareSweep, FromTheWorldsOwnValueTheCostGrowsWithTheChange) {
+  const Scene world = bundled("remote");  // Navarro: anterior Q = -0.26
+  const double own = world.eyes.front().model().anterior_cornea.asphericity;
+  CompareStudySettings settings = small_study();
+  SweepSettings sweep{"cornea_asphericity", own, 0, 3, 2, 5};
+  int steps = 0;
+  const Sweep result = run_sweep(world, settings, sweep, [&] { ++steps; });
+  EXPECT_EQ(static_cast<std::size_t>(steps), sweep_steps(world, settings, sweep));
+  ASSERT_EQ(result.values.size(), 3u);
+  EXPECT_EQ(result.values.front(), own);
+  EXPECT_EQ(result.values[1], own / 2);
+  EXPECT_EQ(result.values.back(), 0.0);
+  // The largest glint displacement and model-based gaze change at home, per value.
+  std::vector<double> glint, gaze;
+  for (const auto& summary : result.summaries) {
+    double g = 0;
+    for (const SimulationRun& run : summary) {
+      if (run.case_name == "displacement" && run.algorithm.starts_with("glint.")) {
+        g = std::max(g, *run.results.number("displacement_max"));
+      }
+      if (run.case_name == "gaze: home" && run.algorithm == "model-based") gaze.push_back(*run.results.number("change_max"));
+    }
+    glint.push_back(g);
+  }
+  ASSERT_EQ(gaze.size(), 3u);
+  EXPECT_EQ(glint[0], 0.0);  // the world's own value: the same rig
+  EXPECT_EQ(gaze[0], 0.0);
+  EXPECT_GT(glint[1], 0.0);
+  EXPECT_GT(glint[2], glint[1]);
+  EXPECT_GT(gaze[2], gaze[1]);
+  // The noise floor, measured on two renders.
+  ASSERT_TRUE(result.noise);
+  EXPECT_EQ(result.noise->frames, 2);
+  EXPECT_GT(result.noise->glint_px, 0.0);
+  EXPECT_LT(result.noise->glint_px, 0.5);
+  ASSERT_TRUE(result.gaze_noise_deg);
+  EXPECT_GT(*result.gaze_noise_deg, 0.0);
+  const std::string csv = sweep_csv(result);
+  // Per value: 4 features, then per position both methods' gaze change and
+  // the model-based cornea's depth error and share within 3 s.d.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 3 * (4 + 3 * (2 + 2)));
+  EXPECT_NE(sweep_json(result).find("\"parameter\": \"cornea_asphericity\""), std::string::npos);
+}
+
+TEST(CompareSweep, ParametersChangeWhatTheyNameAndRefuseWhatTheEyeCannotBe) {
+  const Scene world = bundled("remote");
+  const Scene moved = with_parameter(world, "led_offset_x", 5);
+  EXPECT_EQ(moved.illuminators[0].position.x, world.illuminators[0].position.x + 5);
+  EXPECT_EQ(moved.illuminators[1].position.x, world.illuminators[1].position.x);
+  const Scene kappa = with_parameter(world, "kappa_horizontal", 2);
+  EXPECT_NEAR(kappa.eyes.front().model().kappa_horizontal_rad, 2 * std::numbers::pi / 180, 1e-15);
+  EXPECT_EQ(kappa.eyes.front().rotation_center(), world.eyes.front().rotation_center());
+  const Scene radius = with_parameter(world, "cornea_radius", 7.6);
+  EXPECT_EQ(radius.eyes.front().model().anterior_cornea.radius_mm, 7.6);
+  EXPECT_EQ(radius.eyes.front().model().anterior_cornea.asphericity,
+            world.eyes.front().model().anterior_cornea.asphericity);
+  // Each parameter at a value a human eye can have, and at the world's own.
+  const std::map<std::string, double> plausible = {
+      {"cornea_radius", 7.6},        {"cornea_asphericity", -0.1},  {"aqueous_index", 1.336},
+      {"iris_depth", 3.4},           {"pupil_decentration_x", 0.2}, {"pupil_decentration_y", -0.1},
+      {"kappa_horizontal", 4},       {"kappa_vertical", 2},         {"led_offset_x", 1},
+      {"led_offset_y", 1},           {"led_offset_z", 1}};
+  ASSERT_EQ(plausible.size(), sweep_parameters().size());
+  for (const SweepParameter& p : sweep_parameters()) EXPECT_NO_THROW(with_parameter(world, p.name, plausible.at(p.name)));
+  const EyeModel& own = world.eyes.front().model();
+  EXPECT_EQ(with_parameter(world, "aqueous_index", own.aqueous_index).eyes.front().world_from_eye().translation(),
+            world.eyes.front().world_from_eye().translation());
+  const auto message = [&](const std::string& parameter, double value) {
+    try {
+      with_parameter(world, parameter, value);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(message("cornea_radios", 7).find("unknown parameter \"cornea_radios\" (known: cornea_radius,"),
+            std::string::npos);
+  EXPECT_NE(message("cornea_radius", -1).find("sweep: cornea_radius = -1: the eye's anatomy refuses it"),
+            std::string::npos)
+      << message("cornea_radius", -1);
+  EXPECT_NE(message("aqueous_index", 0.9).find("must be more than 1"), std::string::npos);
+  EXPECT_THROW(run_sweep(world, small_study(), SweepSettings{"cornea_radius", 7, 7, 3, 0, 1}), std::invalid_argument);
+  EXPECT_THROW(run_sweep(world, small_study(), SweepSettings{"cornea_radius", 7, 8, 1, 0, 1}), std::invalid_argument);
 }
 
 }  // namespace

@@ -757,6 +757,15 @@ TEST_F(Cli, CompareRefusesBadOptionsAndVersionsThatCannotBeCompared) {
   EXPECT_TRUE(output_dir_entries().empty());
   // The output folder is a file.
   EXPECT_EQ(run("compare " + scene + " -o " + scene), 3);
+  // Sweeps: the text's form, no assumed version beside, a parameter known.
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius"), 2);
+  EXPECT_NE(err().find("must be \"NAME=FROM:TO:STEPS\""), std::string::npos) << err();
+  EXPECT_EQ(run("compare " + scene + " " + scene + " -o " + out_dir + " --sweep cornea_radius=7:8:3"), 2);
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep corneal_radius=7:8:3"), 1);
+  EXPECT_NE(err().find("unknown parameter \"corneal_radius\" (known: cornea_radius"), std::string::npos) << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius=-1:8:3"), 1);
+  EXPECT_NE(err().find("cornea_radius = -1: the eye's anatomy refuses it"), std::string::npos) << err();
+  EXPECT_TRUE(output_dir_entries().empty());
 }
 
 }  // namespace

@@ -86,11 +86,8 @@ struct RefractedRay {
   Vector3 inside;
 };
 
-std::optional<RefractedRay> refract_into_cornea(const Camera& camera, const Point3& cornea_center,
-                                                const UnitVector3& axis, const Pixel& pixel,
-                                                const GazeEyeModel& model) {
-  const UnitVector3 ray = camera.back_project(pixel);
-  const Point3 o = camera.center();
+std::optional<RefractedRay> refract_into_cornea(const Point3& o, const UnitVector3& ray, const Point3& cornea_center,
+                                                const UnitVector3& axis, const GazeEyeModel& model) {
   const double radius = model.cornea_radius_mm, q = model.cornea_asphericity;
   Vector3 entry, normal;
   if (q == 0) {
@@ -121,6 +118,12 @@ std::optional<RefractedRay> refract_into_cornea(const Camera& camera, const Poin
   const double cos_in = -dot(normal, ray);
   const double sin2_out = eta * eta * (1 - cos_in * cos_in);
   return RefractedRay{entry, eta * ray + (eta * cos_in - std::sqrt(1 - sin2_out)) * normal};
+}
+
+std::optional<RefractedRay> refract_into_cornea(const Camera& camera, const Point3& cornea_center,
+                                                const UnitVector3& axis, const Pixel& pixel,
+                                                const GazeEyeModel& model) {
+  return refract_into_cornea(camera.center(), camera.back_project(pixel), cornea_center, axis, model);
 }
 
 // The optical axis from the imaged pupil centre with a given cornea axis
@@ -174,11 +177,16 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
   std::optional<UnitVector3> axis = start;
   if (!axis) axis = UnitVector3::try_normalize(camera.center() - cornea_center);
   if (!axis) return std::nullopt;
-  // For a sphere the rays do not depend on the axis: traced once.
+  // For a sphere the rays do not depend on the axis: traced once. The
+  // camera's rays never do: back-projected once.
+  const Point3 o = camera.center();
+  std::vector<UnitVector3> sight;
+  sight.reserve(outline.size());
+  for (const Pixel& p : outline) sight.push_back(camera.back_project(p));
   const auto trace = [&] {
     rays.clear();
-    for (const Pixel& p : outline) {
-      const std::optional<RefractedRay> ray = refract_into_cornea(camera, cornea_center, *axis, p, model);
+    for (const UnitVector3& d : sight) {
+      const std::optional<RefractedRay> ray = refract_into_cornea(o, d, cornea_center, *axis, model);
       if (ray) rays.push_back(*ray);
     }
     return rays.size() >= 5;
@@ -191,15 +199,15 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
     if (!axis) return std::nullopt;
   }
   const double depth = model.pupil_depth_mm;
-  Eigen::MatrixXd a(static_cast<Eigen::Index>(rays.size()), 3);
-  Eigen::VectorXd b(static_cast<Eigen::Index>(rays.size()));
   double change = INFINITY;
+  std::optional<Vector3> last_move;
   for (int iteration = 0; iteration < 200; ++iteration) {
     if (model.cornea_asphericity != 0 && iteration > 0 && !trace()) return std::nullopt;
-    if (static_cast<Eigen::Index>(rays.size()) != a.rows()) {
-      a.resize(static_cast<Eigen::Index>(rays.size()), 3);
-      b.resize(static_cast<Eigen::Index>(rays.size()));
-    }
+    // The least-squares circle by its normal equations: 3 x 3, whatever
+    // the outline's length (the points lie about the axis, so they are
+    // well conditioned).
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
     // The rays meet the plane across the axis at the pupil's depth; a
     // circle fitted there (Kasa: linear in the centre and radius) gives
     // the centre whatever the points' spacing.
@@ -213,19 +221,36 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
       const double s = (depth - dot(rays[i].entry, *axis)) / along;
       const Vector3 x = rays[i].entry + s * rays[i].inside - on_axis;
       const double u = dot(x, e1), v = dot(x, e2);
-      a.row(static_cast<Eigen::Index>(i)) << 2 * u, 2 * v, 1;
-      b[static_cast<Eigen::Index>(i)] = u * u + v * v;
+      const Eigen::Vector3d row(2 * u, 2 * v, 1);
+      ata.noalias() += row * row.transpose();
+      atb += row * (u * u + v * v);
     }
-    const Eigen::Vector3d fit = a.colPivHouseholderQr().solve(b);
+    const Eigen::Vector3d fit = ata.ldlt().solve(atb);
     if (!fit.allFinite()) return std::nullopt;
     const std::optional<UnitVector3> next = UnitVector3::try_normalize(on_axis + fit[0] * e1 + fit[1] * e2);
     if (!next) return std::nullopt;
     const double step = angle_between(*next, *axis);
+    const Vector3 move = next->vector() - axis->vector();
     axis = next;
     // Done at 1e-12 rad, or once the steps stop shrinking (rounding).
     if (step < 1e-12 || (step >= change && step < 1e-10)) {
       return OpticalAxis{cornea_center + depth * axis->vector(), *axis};
     }
+    // A conicoid's fixed point converges linearly, each step a near
+    // constant multiple r of the last along one line (r about -0.05: the
+    // axis overshoots and swings back): the rest of the way, r / (1 - r)
+    // of this step, taken at once (Aitken), then two plain steps to measure
+    // r again. The test above still decides when it has converged.
+    if (last_move) {
+      const double r = dot(move, *last_move) / last_move->squared_norm();
+      if (std::abs(r) < 0.5 && std::abs(dot(move, *last_move)) > 0.9 * move.norm() * last_move->norm()) {
+        if (const auto jumped = UnitVector3::try_normalize(axis->vector() + move * (r / (1 - r)))) axis = jumped;
+        last_move.reset();
+        change = INFINITY;
+        continue;
+      }
+    }
+    if (model.cornea_asphericity != 0) last_move = move;
     change = step;
   }
   return std::nullopt;
@@ -367,13 +392,13 @@ ModelGaze model_gaze(const Camera& camera, const std::vector<Illuminator>& light
 
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
-                              const Point3& start, const std::optional<FeatureNoise>& given_noise) {
+                              const Point3& start, const std::optional<FeatureNoise>& given_noise, bool propagate) {
   const FeatureNoise noise = given_noise.value_or(FeatureNoise{});
   check(noise, "estimate_model_gaze: noise");
   std::vector<int> rejected;
   ModelGaze out =
       model_gaze(camera, lights, features, model, screen, start, noise, CorneaFitSettings{}.reject_beyond_sd, &rejected);
-  if (!given_noise || !out.valid) return out;
+  if (!given_noise || !propagate || !out.valid) return out;
   // Each feature coordinate moved both ways by a small step; the cornea's
   // centre's and the screen point's changes give the Jacobians, and their
   // covariances follow. A conicoid's centre moves with the pupil too,

@@ -64,6 +64,20 @@ struct CalibrationSettings {
 // whose cornea is no ellipsoid (the tracker rig's is checked alike).
 void check_calibration_rig(const Scene& rig, const std::string& rig_file, const CalibrationSettings& settings);
 
+// The detectors' noise on renders of the rig: its eye at its place
+// fixating `frames` targets uniform over the screen (drawn from `seed`, the
+// renders seeded from it on), read by purkinje's tracker; the RMS of the
+// errors against the labels per axis (px), clipped as the cornea fit
+// rejects glints, as calibrate's noise frames measure it. Throws
+// std::invalid_argument for a rig without a screen or one eye, or frames
+// outside 1 to 10000.
+struct DetectorNoise {
+  double glint_px = 0, pupil_px = 0;  // 0: nothing measured
+  int frames = 0, glint_errors = 0, pupil_errors = 0;
+};
+DetectorNoise measure_detector_noise(const Scene& rig, int frames, std::uint64_t seed,
+                                     const std::function<void()>& step = {});
+
 // How many frames run_calibration renders (for progress; with exact
 // features, how many it computes).
 std::size_t calibration_frames(const CalibrationSettings& settings);

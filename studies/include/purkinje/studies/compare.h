@@ -150,6 +150,62 @@ std::vector<std::string> compare_outputs();
 void write_compare(const std::filesystem::path& dir, const Scene& world, const Scene& assumed,
                    const CompareStudy& study, const CompareStudySettings& settings);
 
+// One parameter of the assumed version swept: each value's assumed
+// version is the world with that parameter changed (with_parameter), and
+// the study runs on it without images. Beside the curves, the noise floor:
+// the detectors' noise measured on renders of the world
+// (measure_detector_noise), and the model-based gaze s.d. the tracker
+// reports at home with that noise (the median).
+struct SweepParameter {
+  std::string name, unit, meaning;
+};
+// The parameters a sweep can change, in order.
+const std::vector<SweepParameter>& sweep_parameters();
+
+// The world with `parameter` at `value`: an eye parameter is the assumed
+// eye's value itself (its rotation centre, optical axis and appearance
+// kept); led_offset_x/y/z move the first light by `value` mm from where
+// the world has it. Throws std::invalid_argument naming the parameter and
+// the value for an unknown parameter (listing the known) or a value the
+// eye's anatomy refuses (with its rule).
+Scene with_parameter(const Scene& world, const std::string& parameter, double value);
+
+struct SweepSettings {
+  std::string parameter;
+  double from = 0, to = 0;
+  int steps = 11;          // values from `from` to `to`, evenly spaced, both included
+  int noise_frames = 16;   // renders measuring the detectors' noise floor (0: none; needs a screen)
+  std::uint64_t seed = 1;  // of the noise frames' targets and renders
+};
+
+struct Sweep {
+  std::string parameter, unit;
+  std::vector<double> values;
+  std::vector<std::vector<SimulationRun>> summaries;  // per value, run_compare's summary
+  std::optional<DetectorNoise> noise;                 // nullopt: not measured
+  std::optional<double> gaze_noise_deg;               // the reported model-based gaze s.d. at home, median
+};
+
+// The sweep: `settings` for each value's study (images are left out; the
+// feature noise its uncertainty assumes is the measured one, unless
+// settings.calibration gives it). Throws std::invalid_argument for
+// settings out of range, as with_parameter does, and as run_compare does.
+Sweep run_sweep(const Scene& world, const CompareStudySettings& settings, const SweepSettings& sweep,
+                const std::function<void()>& step = {});
+std::size_t sweep_steps(const Scene& world, const CompareStudySettings& settings, const SweepSettings& sweep);
+
+// A row per value, subject and quantity: `value,subject,quantity,mean,rms,max,unit`,
+// subjects the features (displacement, px) and "METHOD, POSITION" (gaze
+// change, deg; the model-based cornea depth error, mm, and share within
+// 3 s.d. in depth, %).
+std::string sweep_csv(const Sweep& sweep);
+// The parameter, its unit and meaning, the values and the noise floor, as JSON.
+std::string sweep_json(const Sweep& sweep);
+// The files write_sweep writes, and those purkinje.figures adds.
+std::vector<std::string> sweep_outputs();
+// sweep.csv and sweep.json into `dir`, all-or-nothing.
+void write_sweep(const std::filesystem::path& dir, const Sweep& sweep);
+
 // A row per head position, method and target: the target, both estimates,
 // both errors and the change (deg); empty cells where there is none.
 std::string gaze_change_csv(const std::vector<GazeChange>& gaze);

@@ -131,10 +131,11 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
                                                            const std::optional<UnitVector3>& start = std::nullopt);
 
 // The whole model-based estimate for one frame. `start`: a guess of the
-// cornea's centre for the glint fit. With `noise` given (it costs an
-// estimate per feature coordinate, both ways), the cornea's covariance and
-// the screen point's are propagated from all the features; the cornea's
-// even when the gaze misses the screen. Without, or where the estimate
+// cornea's centre for the glint fit. `noise` weighs the features
+// (FeatureNoise's default without). With `noise` given and `propagate`
+// (it costs an estimate per feature coordinate, both ways), the cornea's
+// covariance and the screen point's are propagated from all the features;
+// the cornea's even when the gaze misses the screen. Without, or where the estimate
 // itself is not valid (the pupil's ray misses the model), the cornea's
 // covariance is the glint fit's, about a fixed axis, from FeatureNoise's
 // default glint noise; a warning says when propagation failed. Throws
@@ -142,7 +143,8 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
 // pupil_px finite and > 0, glint_sd_scale finite and >= 0).
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,
                               const GazeFeatures& features, const GazeEyeModel& model, const Screen& screen,
-                              const Point3& start, const std::optional<FeatureNoise>& noise = std::nullopt);
+                              const Point3& start, const std::optional<FeatureNoise>& noise = std::nullopt,
+                              bool propagate = true);
 
 struct ModelGazeCalibrationSettings {
   bool fit_pupil_depth = false;   // with kappa

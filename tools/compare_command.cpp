@@ -29,6 +29,7 @@ struct CompareRequest {
   std::string output_dir;
   studies::CompareStudySettings settings;
   std::string camera;                       // by name; empty: the first
+  std::string world_eye, assumed_eye;       // preset names or eye-model files
   std::string assumed_cornea_text;          // as given: "R,Q"
   std::vector<std::string> head_move_texts; // as given: "x,y,z" in mm
   bool no_calibration = false, no_images = false, no_figures = false, quiet = false;
@@ -70,12 +71,16 @@ void read_sweep(CompareRequest& request) {
 
 int run_sweep(CompareRequest request) {
   read_sweep(request);
-  if (!request.assumed_file.empty() || !request.assumed_cornea_text.empty() || request.no_images) {
+  if (!request.assumed_file.empty() || !request.assumed_cornea_text.empty() || !request.assumed_eye.empty() ||
+      request.no_images) {
     throw CommandError(kUsageError, "--sweep: the assumed versions are the world with the parameter swept: no "
-                                    "ASSUMED, --assumed-cornea or --no-images with it");
+                                    "ASSUMED, --assumed-eye, --assumed-cornea or --no-images with it");
   }
-  refuse(check_output_folder(request.output_dir, {}, studies::sweep_outputs(), {request.world_file}));
-  const Scene world = load_scene(request.world_file);
+  std::vector<fs::path> inputs = {request.world_file};
+  if (!request.world_eye.empty()) inputs.push_back(request.world_eye);
+  refuse(check_output_folder(request.output_dir, {}, studies::sweep_outputs(), inputs));
+  const Scene world = request.world_eye.empty() ? load_scene(request.world_file)
+                                                : studies::with_eye_model(load_scene(request.world_file), request.world_eye);
   studies::CompareStudySettings& settings = request.settings;
   if (request.head_move_texts.empty()) settings.calibration.head_moves = studies::default_head_moves(world);
   for (const std::string& move : request.head_move_texts) {
@@ -106,10 +111,14 @@ int run_compare(CompareRequest request) {
   if (!request.sweep_text.empty()) return run_sweep(std::move(request));
   studies::CompareStudySettings& settings = request.settings;
   std::vector<fs::path> inputs = {request.world_file};
-  if (!request.assumed_file.empty()) inputs.push_back(request.assumed_file);
+  for (const std::string& input : {request.assumed_file, request.world_eye, request.assumed_eye}) {
+    if (!input.empty()) inputs.push_back(input);  // an eye model by a preset's name names no file: no harm
+  }
   refuse(check_output_folder(request.output_dir, {}, studies::compare_outputs(), inputs));
-  const Scene world = load_scene(request.world_file);
-  Scene assumed = request.assumed_file.empty() ? world : load_scene(request.assumed_file);
+  const Scene as_read = load_scene(request.world_file);
+  Scene assumed = request.assumed_file.empty() ? as_read : load_scene(request.assumed_file);
+  const Scene world = request.world_eye.empty() ? as_read : studies::with_eye_model(as_read, request.world_eye);
+  if (!request.assumed_eye.empty()) assumed = studies::with_eye_model(assumed, request.assumed_eye);
   if (!request.assumed_cornea_text.empty()) {
     const auto c = numbers<2>("--assumed-cornea", request.assumed_cornea_text,
                               "must be \"R,Q\" with the apex radius R in (0, 100) mm and the asphericity Q in (-1, 10)");
@@ -183,6 +192,11 @@ Command add_compare_command(CLI::App& app) {
   compare->add_option("WORLD", request->world_file, "Scene file: the rig as it is")->required();
   compare->add_option("ASSUMED", request->assumed_file, "Scene file: the rig as the tracker assumes it");
   compare->add_option("-o,--output", request->output_dir, "Output folder (created if missing)")->required();
+  compare->add_option("--world-eye", request->world_eye,
+                      "The world eye's anatomy: a preset (keratometric, le_grand, navarro) or an eye-model\n"
+                      "file (JSON: a scene eye's anatomy keys); its place, gaze and pupil size kept");
+  compare->add_option("--assumed-eye", request->assumed_eye,
+                      "The assumed eye's anatomy, the same way (applied to ASSUMED, or to WORLD as read)");
   compare->add_option("--assumed-cornea", request->assumed_cornea_text,
                       "The assumed eye's cornea as \"R,Q\": one refracting surface of apex radius R (mm)\n"
                       "and asphericity Q with the keratometric index 1.3375 (e.g. 7.8,0: the classic sphere)");

@@ -59,21 +59,28 @@ def _table(text: str):
     return pandas.read_csv(io.StringIO(text), float_precision="round_trip")
 
 
-def compare(world: Scene, assumed: Optional[Scene] = None, *, assumed_cornea: Optional[Tuple[float, float]] = None,
+def _model(model: Optional[Union[str, "os.PathLike[str]"]]) -> Optional[str]:
+    return None if model is None else os.fspath(model)
+
+
+def compare(world: Scene, assumed: Optional[Scene] = None, *, world_eye: Optional[str] = None,
+            assumed_eye: Optional[str] = None, assumed_cornea: Optional[Tuple[float, float]] = None,
             grid: int = 9, cap_deg: float = 15.0, camera: int = 0, gaze_grid: int = 9, calibration_grid: int = 3,
             head_moves: Optional[Sequence[Sequence[float]]] = None, glint_noise_px: Optional[float] = None,
             pupil_noise_px: Optional[float] = None, calibrate: bool = True, images: bool = True, samples: int = 1,
             seed: int = 0, progress: Optional[Callable[[int, int], None]] = None) -> CompareStudy:
     """The compare study, as `purkinje compare` runs it (the same options by
     their long names): `assumed` (default: `world`) is the rig as the
-    tracker assumes it, `assumed_cornea` (R, Q) makes its eye's cornea one
+    tracker assumes it; `world_eye` and `assumed_eye` replace an eye's
+    anatomy with a preset's (`eye_model_presets()`) or an eye-model file's
+    (a path); `assumed_cornea` (R, Q) makes the assumed eye's cornea one
     refracting surface with the keratometric index. `head_moves` default
     to a twelfth of the eye's distance sideways and a sixth away.
     `progress(done, total)` is called after each calibration frame and
     render; the GIL is released meanwhile. Raises ValueError for versions
     that cannot be compared or settings out of range."""
     run, displacements, gaze, summary, text, skipped, world_image, assumed_image = _purkinje._compare(
-        world, assumed if assumed is not None else world,
+        world, assumed if assumed is not None else world, _model(world_eye), _model(assumed_eye),
         tuple(assumed_cornea) if assumed_cornea is not None else None, grid, cap_deg, camera, gaze_grid,
         calibration_grid, [tuple(m) for m in head_moves] if head_moves is not None else None, glint_noise_px,
         pupil_noise_px, calibrate, images, samples, seed, progress)

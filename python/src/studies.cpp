@@ -69,12 +69,22 @@ void bind_studies(py::module_& m) {
 
   py::class_<CompareRun, std::shared_ptr<CompareRun>>(m, "_CompareRun", "A compare study's results, for writing.");
   m.def("_compare",
-        [](const Scene& world, const Scene& assumed, const std::optional<std::array<double, 2>>& assumed_cornea,
+        [](const Scene& world_as_given, const Scene& assumed_as_given, const std::optional<std::string>& world_eye,
+           const std::optional<std::string>& assumed_eye, const std::optional<std::array<double, 2>>& assumed_cornea,
            int grid, double cap_deg, int camera, int gaze_grid, int calibration_grid,
            const std::optional<std::vector<std::array<double, 3>>>& head_moves, std::optional<double> glint_noise_px,
            std::optional<double> pupil_noise_px, bool calibrate, bool images, int samples, std::uint64_t seed,
            const py::object& progress) {
           auto run = std::make_shared<CompareRun>();
+          const auto given = [](const std::optional<std::string>& model) {
+            return model ? std::vector<std::filesystem::path>{*model} : std::vector<std::filesystem::path>{};
+          };
+          const Scene world = reading(given(world_eye), [&] {
+            return world_eye ? studies::with_eye_model(world_as_given, *world_eye) : world_as_given;
+          });
+          const Scene assumed = reading(given(assumed_eye), [&] {
+            return assumed_eye ? studies::with_eye_model(assumed_as_given, *assumed_eye) : assumed_as_given;
+          });
           run->world = world;
           run->assumed = assumed_cornea
                              ? studies::with_one_surface_cornea(assumed, {(*assumed_cornea)[0], (*assumed_cornea)[1]})
@@ -112,7 +122,8 @@ void bind_studies(py::module_& m) {
                                 study.calibration_skipped, rendered(run->world, study.world_image),
                                 rendered(run->assumed, study.assumed_image));
         },
-        py::arg("world"), py::arg("assumed"), py::arg("assumed_cornea"), py::arg("grid"), py::arg("cap_deg"),
+        py::arg("world"), py::arg("assumed"), py::arg("world_eye"), py::arg("assumed_eye"), py::arg("assumed_cornea"),
+        py::arg("grid"), py::arg("cap_deg"),
         py::arg("camera"), py::arg("gaze_grid"), py::arg("calibration_grid"), py::arg("head_moves"),
         py::arg("glint_noise_px"), py::arg("pupil_noise_px"), py::arg("calibrate"), py::arg("images"),
         py::arg("samples"), py::arg("seed"), py::arg("progress"));

@@ -2,13 +2,16 @@
 
 #include "purkinje/studies/compare.h"
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
 
 #include "purkinje/models/check.h"
 #include "purkinje/models/csv.h"
+#include "purkinje/models/scene_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -336,6 +339,55 @@ Scene with_one_surface_cornea(const Scene& scene, const Conicoid& anterior) {
     eye = changed;
   }
   return out;
+}
+
+Scene with_eye_model(const Scene& scene, const std::string& model) {
+  if (scene.eyes.size() != 1) {
+    throw std::invalid_argument("compare: an eye model replaces the eye of a scene with one eye (it has " +
+                                std::to_string(scene.eyes.size()) + ")");
+  }
+  static const std::vector<std::string> kAnatomy = {"model",          "cornea", "posterior_cornea",
+                                                    "aqueous_index",  "iris",   "pupil",
+                                                    "rotation_center_depth_mm", "sclera_radius_mm", "kappa_deg"};
+  const auto& presets = eye_model_preset_names();
+  const bool preset = std::find(presets.begin(), presets.end(), model) != presets.end();
+  nlohmann::ordered_json anatomy;
+  if (preset) {
+    anatomy = {{"model", model}};
+  } else {
+    std::ifstream in(model, std::ios::binary);
+    if (!in) {
+      std::string names;
+      for (const std::string& p : presets) names += (names.empty() ? "" : ", ") + p;
+      throw SceneError(model + ": cannot open the eye-model file (nor is it a preset: " + names + ")");
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    try {
+      anatomy = nlohmann::ordered_json::parse(text.str(), nullptr, true, /*ignore_comments=*/true);
+    } catch (const nlohmann::json::parse_error& error) {
+      throw SceneError(model + ": not JSON: " + error.what());
+    }
+    if (!anatomy.is_object()) throw SceneError(model + ": must be a JSON object of an eye's anatomy keys");
+    for (const auto& [key, value] : anatomy.items()) {
+      if (std::find(kAnatomy.begin(), kAnatomy.end(), key) == kAnatomy.end()) {
+        std::string keys;
+        for (const std::string& k : kAnatomy) keys += (keys.empty() ? "" : ", ") + k;
+        throw SceneError(model + ": key \"" + key + "\": an eye-model file holds only anatomy (" + keys + ")");
+      }
+    }
+  }
+  // The scene as a file, its eye's anatomy replaced, read back by the
+  // scene reader: the file's keys get the reader's rules and messages.
+  nlohmann::ordered_json file = nlohmann::ordered_json::parse(scene_to_json(scene));
+  nlohmann::ordered_json& eye = file["eyes"][0];
+  const double pupil_radius = scene.eyes.front().model().pupil_radius_mm;
+  for (const std::string& key : kAnatomy) eye.erase(key);
+  for (const auto& [key, value] : anatomy.items()) eye[key] = value;
+  if (!anatomy.contains("pupil")) eye["pupil"] = {{"radius_mm", pupil_radius}};
+  const Point3 center = scene.eyes.front().rotation_center();
+  eye["position"] = {{"rotation_center_mm", {center.x, center.y, center.z}}};
+  return parse_scene(file.dump(), preset ? "eye model \"" + model + "\"" : model);
 }
 
 CalibrationSettings CompareStudySettings::default_calibration() {

@@ -87,3 +87,15 @@ def test_a_sweep_from_python_writes_what_the_command_writes(remote, tmp_path):
     assert bands == [floor["glint_px"], floor["pupil_px"], floor["gaze_deg"]]
     with pytest.raises(ValueError, match='unknown parameter "cornea_radios"'):
         purkinje.sweep(remote, "cornea_radios", 7, 8)
+
+
+def test_eye_models_by_preset_name_or_file(remote, tmp_path):
+    study = purkinje.compare(remote, assumed_eye="keratometric", grid=2, gaze_grid=2, images=False)
+    assert study.gaze[study.gaze["method"] == "model-based"]["change_deg"].max() > 0
+    same = tmp_path / "navarro.json"
+    same.write_text('{"model": "navarro", "pupil": {"radius_mm": 2.0}}')
+    # The remote rig's own anatomy, from a file: nothing moves.
+    assert (purkinje.compare(remote, assumed_eye=same, grid=2, gaze_grid=2, images=False)
+            .displacements["displacement_px"] == 0).all()
+    with pytest.raises(FileNotFoundError, match="navaro: cannot open the eye-model file"):
+        purkinje.compare(remote, assumed_eye="navaro", images=False)

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -456,6 +457,58 @@ TEST(CompareSweep, ParametersChangeWhatTheyNameAndRefuseWhatTheEyeCannotBe) {
   EXPECT_NE(message("aqueous_index", 0.9).find("must be more than 1"), std::string::npos);
   EXPECT_THROW(run_sweep(world, small_study(), SweepSettings{"cornea_radius", 7, 7, 3, 0, 1}), std::invalid_argument);
   EXPECT_THROW(run_sweep(world, small_study(), SweepSettings{"cornea_radius", 7, 8, 1, 0, 1}), std::invalid_argument);
+}
+
+// Eye models by preset name or file: the anatomy replaced, the eye's place,
+// gaze and pupil kept.
+TEST(CompareEyeModel, APresetOrAFileReplacesTheAnatomyAndKeepsThePlaceAndPupil) {
+  Scene world = with_model(bundled("remote"), [](EyeModel& m) { m.pupil_radius_mm = 2.5; });
+  const Eye& eye = world.eyes.front();
+  const Scene k = with_eye_model(world, "keratometric");
+  const Eye& kept = k.eyes.front();
+  EXPECT_EQ(kept.model().anterior_cornea.radius_mm, keratometric_eye().anterior_cornea.radius_mm);
+  EXPECT_FALSE(kept.model().posterior_cornea);
+  EXPECT_EQ(kept.model().kappa_horizontal_rad, keratometric_eye().kappa_horizontal_rad);
+  EXPECT_EQ(kept.model().pupil_radius_mm, 2.5);
+  EXPECT_LT(distance(kept.rotation_center(), eye.rotation_center()), 1e-12);
+  EXPECT_LT(angle_between(kept.optical_axis().vector(), eye.optical_axis().vector()), 1e-15);
+  EXPECT_EQ(kept.appearance().iris_seed, eye.appearance().iris_seed);
+
+  const std::string dir = ::testing::TempDir();
+  const auto file = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + name) << text;
+    return dir + name;
+  };
+  // The file naming the scene's own model and pupil: the same anatomy.
+  const Scene same = with_eye_model(bundled("remote"), file("navarro.json", R"({"model": "navarro", "pupil": {"radius_mm": 2.0}})"));
+  const EyeModel& a = same.eyes.front().model();
+  const EyeModel& b = bundled("remote").eyes.front().model();
+  EXPECT_EQ(a.anterior_cornea.asphericity, b.anterior_cornea.asphericity);
+  EXPECT_EQ(a.aqueous_index, b.aqueous_index);
+  EXPECT_EQ(a.pupil_radius_mm, b.pupil_radius_mm);
+  EXPECT_EQ(a.kappa_horizontal_rad, b.kappa_horizontal_rad);
+  const std::string flat = file("flat.json", R"({"model": "navarro", "cornea": {"asphericity": 0}})");
+  EXPECT_EQ(with_eye_model(world, flat).eyes.front().model().anterior_cornea.asphericity, 0.0);
+
+  const auto message = [&](const std::string& model) {
+    try {
+      with_eye_model(world, model);
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  const std::string placed = file("placed.json", R"({"model": "navarro", "position": {"rotation_center_mm": [0, 0, 600]}})");
+  EXPECT_NE(message(placed).find("placed.json: key \"position\": an eye-model file holds only anatomy"),
+            std::string::npos)
+      << message(placed);
+  const std::string bad = file("bad.json", R"({"cornea": {"radius_mm": -1}})");
+  EXPECT_NE(message(bad).find("bad.json"), std::string::npos) << message(bad);
+  EXPECT_NE(message(bad).find("radius_mm"), std::string::npos) << message(bad);
+  EXPECT_NE(message("navaro").find("navaro: cannot open the eye-model file (nor is it a preset: keratometric"),
+            std::string::npos)
+      << message("navaro");
+  EXPECT_NE(message(file("list.json", "[1]")).find("must be a JSON object"), std::string::npos);
 }
 
 }  // namespace

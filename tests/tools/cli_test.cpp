@@ -757,6 +757,16 @@ TEST_F(Cli, CompareRefusesBadOptionsAndVersionsThatCannotBeCompared) {
   EXPECT_TRUE(output_dir_entries().empty());
   // The output folder is a file.
   EXPECT_EQ(run("compare " + scene + " -o " + scene), 3);
+  // Eye models by preset name; a name that is neither a preset nor a file.
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-eye keratometric --grid 2 --gaze-grid 2 "
+                "--no-images --no-figures --quiet"),
+            0)
+      << err();
+  EXPECT_NE(read(output_dir_ / "summary.txt").find("change_max"), std::string::npos);
+  fs::remove_all(output_dir_);
+  fs::create_directories(output_dir_);
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-eye navaro"), 1);
+  EXPECT_NE(err().find("navaro: cannot open the eye-model file (nor is it a preset"), std::string::npos) << err();
   // Sweeps: the text's form, no assumed version beside, a parameter known.
   EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius"), 2);
   EXPECT_NE(err().find("must be \"NAME=FROM:TO:STEPS\""), std::string::npos) << err();

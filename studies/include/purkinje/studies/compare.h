@@ -73,6 +73,18 @@ std::string displacement_csv(const DisplacementField& field);
 // cornea), each eye's rotation centre, optical axis and appearance kept.
 Scene with_one_surface_cornea(const Scene& scene, const Conicoid& anterior);
 
+// The scene with its eye's anatomy from `model`: an eye-model preset's
+// name (eye_model_preset_names) or a JSON file holding the anatomy keys of
+// a scene file's eye (docs/scene-format.md: model, cornea,
+// posterior_cornea, aqueous_index, iris, pupil, rotation_center_depth_mm,
+// sclera_radius_mm, kappa_deg), read by the scene reader. The eye keeps
+// its centre of rotation, optical axis, appearance, lids and head, and
+// its pupil's radius unless the file gives "pupil". Throws SceneError
+// naming the file (or the preset's name), the key and the rule, for a
+// file that cannot be read, keys that are not anatomy, or an anatomy the
+// reader refuses; std::invalid_argument for a scene without one eye.
+Scene with_eye_model(const Scene& scene, const std::string& model);
+
 struct CompareStudySettings {
   CompareSettings field;
   // What the difference costs a tracker (when the world has a screen and

@@ -81,6 +81,7 @@ int run_calibrate(CalibrateRequest request) {
     write_file_atomically(dir / "calibration.json", studies::simulation_json(study.runs));
     write_file_atomically(dir / "calibration.csv", studies::simulation_csv(study.runs));
     write_file_atomically(dir / "frames.csv", study.frames_csv);
+    studies::remove_stale_outputs(dir, {"gaze_error.png", "figures.json"});  // drawn anew, or not at all
   });
   std::optional<std::string> no_figures;
   if (request.no_figures) {

@@ -54,6 +54,16 @@ std::array<double, N> numbers(const std::string& option, const std::string& text
   return v;
 }
 
+// The camera --camera names (default: the first).
+int camera_index(const Scene& world, const CompareRequest& request) {
+  if (request.camera.empty()) return 0;
+  for (std::size_t i = 0; i < world.cameras.size(); ++i) {
+    if (world.cameras[i].name() == request.camera) return static_cast<int>(i);
+  }
+  throw CommandError(kUsageError, "--camera \"" + request.camera + "\": " + request.world_file +
+                                      " has no camera of that name");
+}
+
 // --sweep "NAME=FROM:TO:STEPS" into the sweep's settings.
 void read_sweep(CompareRequest& request) {
   const std::string& text = request.sweep_text;
@@ -71,10 +81,9 @@ void read_sweep(CompareRequest& request) {
 
 int run_sweep(CompareRequest request) {
   read_sweep(request);
-  if (!request.assumed_file.empty() || !request.assumed_cornea_text.empty() || !request.assumed_eye.empty() ||
-      request.no_images) {
+  if (!request.assumed_file.empty()) {
     throw CommandError(kUsageError, "--sweep: the assumed versions are the world with the parameter swept: no "
-                                    "ASSUMED, --assumed-eye, --assumed-cornea or --no-images with it");
+                                    "ASSUMED with it");
   }
   std::vector<fs::path> inputs = {request.world_file};
   if (!request.world_eye.empty()) inputs.push_back(request.world_eye);
@@ -87,8 +96,13 @@ int run_sweep(CompareRequest request) {
     settings.calibration.head_moves.push_back(numbers<3>("--head-move", move, "must be three numbers \"x,y,z\" in mm"));
   }
   settings.calibrate = !request.no_calibration;
-  // A value the eye refuses is named before any work.
-  for (const double v : {request.sweep.from, request.sweep.to}) studies::with_parameter(world, request.sweep.parameter, v);
+  settings.field.camera = camera_index(world, request);
+  // Settings or ends the sweep refuses are named before any work.
+  try {
+    studies::check_sweep(world, request.sweep);
+  } catch (const std::invalid_argument& refused) {
+    throw CommandError(kUsageError, "--sweep \"" + request.sweep_text + "\": " + refused.what());
+  }
   studies::Sweep sweep;
   {
     Progress progress("compare --sweep", studies::sweep_steps(world, settings, request.sweep), request.quiet);
@@ -120,25 +134,14 @@ int run_compare(CompareRequest request) {
   const Scene world = request.world_eye.empty() ? as_read : studies::with_eye_model(as_read, request.world_eye);
   if (!request.assumed_eye.empty()) assumed = studies::with_eye_model(assumed, request.assumed_eye);
   if (!request.assumed_cornea_text.empty()) {
-    const auto c = numbers<2>("--assumed-cornea", request.assumed_cornea_text,
-                              "must be \"R,Q\" with the apex radius R in (0, 100) mm and the asphericity Q in (-1, 10)");
-    if (!(c[0] > 0 && c[0] < 100) || !(c[1] > -1 && c[1] < 10)) {
-      throw CommandError(kUsageError, "--assumed-cornea \"" + request.assumed_cornea_text +
-                                          "\": must be \"R,Q\" with the apex radius R in (0, 100) mm and the "
-                                          "asphericity Q in (-1, 10)");
-    }
-    assumed = studies::with_one_surface_cornea(assumed, {c[0], c[1]});
-  }
-  if (!request.camera.empty()) {
-    settings.field.camera = -1;
-    for (std::size_t i = 0; i < world.cameras.size(); ++i) {
-      if (world.cameras[i].name() == request.camera) settings.field.camera = static_cast<int>(i);
-    }
-    if (settings.field.camera < 0) {
-      throw CommandError(kUsageError, "--camera \"" + request.camera + "\": " + request.world_file +
-                                          " has no camera of that name");
+    const auto c = numbers<2>("--assumed-cornea", request.assumed_cornea_text, "must be \"R,Q\", e.g. 7.8,0");
+    try {
+      assumed = studies::with_one_surface_cornea(assumed, {c[0], c[1]});
+    } catch (const std::invalid_argument& refused) {
+      throw CommandError(kUsageError, "--assumed-cornea \"" + request.assumed_cornea_text + "\": " + refused.what());
     }
   }
+  settings.field.camera = camera_index(world, request);
   if (request.head_move_texts.empty()) {
     settings.calibration.head_moves = studies::default_head_moves(world);
   }
@@ -237,12 +240,16 @@ Command add_compare_command(CLI::App& app) {
   compare->add_option("--sweep", request->sweep_text,
                       "Sweep one parameter of the assumed version, \"NAME=FROM:TO:STEPS\" (e.g.\n"
                       "cornea_asphericity=-0.5:0:11); writes sweep.csv, sweep.json, sweep.png. NAME:" + parameters);
+  CLI::Option* sweep = compare->get_option("--sweep");
+  for (const char* alone : {"--assumed-eye", "--assumed-cornea", "--samples", "--seed"}) {
+    sweep->excludes(compare->get_option(alone));  // the sweep renders no images and makes its own assumed versions
+  }
   compare->add_option("--noise-frames", request->sweep.noise_frames,
                       "Sweep: renders of the world that measure the detectors' noise floor (0: none)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
   compare->add_flag("--no-calibration", request->no_calibration, "No calibration: displacements and images only");
-  compare->add_flag("--no-images", request->no_images, "No renders: the geometric part only");
+  compare->add_flag("--no-images", request->no_images, "No renders: the geometric part only")->excludes(sweep);
   compare->add_flag("--no-figures", request->no_figures, "Data files only (no matplotlib)");
   compare->add_flag("--quiet", request->quiet, "No progress on standard error");
   return {compare, [request] { return run_command("compare", [&] { return run_compare(*request); }); }};

@@ -57,8 +57,8 @@ std::optional<std::string> draw_figures(const std::string& study, const std::fil
     throw std::runtime_error("figures: `" + command + "` failed (" +
                              (WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
                                                 : std::string("killed by a signal")) +
-                             "); the data files are written. Figures need Debian's python3-matplotlib, "
-                             "python3-pandas and python3-pil (scripts/install-deps)");
+                             ", its messages above); the data files are written, the figures not all. They "
+                             "need Debian's python3-matplotlib, python3-pandas and python3-pil (scripts/install-deps)");
   }
   return std::nullopt;
 #endif

@@ -52,11 +52,26 @@ def nice_length(largest: float) -> float:
     return decade
 
 
+def _atomically(path: Path, write) -> None:
+    """`write(temporary)` then the temporary renamed to `path`: the file is
+    whole or absent, and no temporary is left when writing fails."""
+    temporary = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    try:
+        write(temporary)
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
 def _save(fig, path: Path) -> None:
-    """Written whole or not at all: a temporary file renamed into place."""
-    temporary = path.with_name(path.name + ".tmp")
-    fig.savefig(temporary, format=path.suffix.lstrip("."), dpi=100)
-    os.replace(temporary, path)
+    _atomically(path, lambda t: fig.savefig(t, format=path.suffix.lstrip("."), dpi=100))
+
+
+def _number(value: float) -> Optional[float]:
+    """A finite float, or None (JSON has no NaN)."""
+    value = float(value)
+    return value if math.isfinite(value) else None
 
 
 def _grid(x: np.ndarray, y: np.ndarray, values: np.ndarray) -> Tuple[np.ndarray, List[float]]:
@@ -150,10 +165,8 @@ def _gaze_figure(plt, panels: Sequence[Tuple[str, str, Any]], path: Path, heat_l
 
 
 def _write_figures_json(folder: Path, figures: Dict[str, Any]) -> None:
-    path = folder / "figures.json"
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(figures, indent=2) + "\n")
-    os.replace(temporary, path)
+    text = json.dumps(figures, indent=2, allow_nan=False) + "\n"
+    _atomically(folder / "figures.json", lambda t: t.write_text(text))
 
 
 def calibration_figures(folder: PathLike) -> List[Path]:
@@ -305,10 +318,9 @@ def _flip(folder: Path, seen: Dict[str, np.ndarray], zoom: Tuple[int, int, int, 
         image = image.resize((image.size[0] * factor, image.size[1] * factor), Image.NEAREST).convert("RGB")
         ImageDraw.Draw(image).text((6, 6), name, fill=(255, 64, 64))
         frames.append(image)
-    path = folder / "flip.gif"
-    temporary = path.with_name("flip.tmp.gif")
-    frames[0].save(temporary, save_all=True, append_images=frames[1:], duration=1000, loop=0)
-    os.replace(temporary, path)
+    _atomically(folder / "flip.gif",
+                lambda t: frames[0].save(t, format="GIF", save_all=True, append_images=frames[1:], duration=1000,
+                                         loop=0))
 
 
 def _index(folder: Path, figures: Sequence[str]) -> None:
@@ -325,10 +337,7 @@ def _index(folder: Path, figures: Sequence[str]) -> None:
     for name in figures:
         lines += [f"## {name}", "", captions.get(name, ""), "", f"![{name}]({name})", ""]
     lines += ["## Summary", "", "```", summary.rstrip(), "```", ""]
-    path = folder / "index.md"
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text("\n".join(lines))
-    os.replace(temporary, path)
+    _atomically(folder / "index.md", lambda t: t.write_text("\n".join(lines)))
 
 
 def compare_figures(folder: PathLike) -> List[Path]:
@@ -395,7 +404,7 @@ def sweep_figures(folder: PathLike) -> List[Path]:
             colour = f"C{k}"
             ax.plot(rows["value"], rows["max"], "-o", color=colour, markersize=3, label=f"{subject}: largest")
             ax.plot(rows["value"], rows["mean"], "--", color=colour, label=f"{subject}: mean")
-            curves.append({"subject": subject, "largest": float(rows["max"].max())})
+            curves.append({"subject": subject, "largest": _number(rows["max"].max())})
         if band is not None:
             ax.axhspan(0, band, color="grey", alpha=0.3, label=f"{band_label}: {band:.3g}")
         ax.set_xlabel(name)
@@ -404,7 +413,7 @@ def sweep_figures(folder: PathLike) -> List[Path]:
         ax.set_ylim(bottom=0)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
-        drawn.append({"title": title, "curves": curves, "noise_band": band})
+        drawn.append({"title": title, "curves": curves, "noise_band": _number(band) if band is not None else None})
     fig.suptitle(f"Sweep of the assumed version's {about['parameter']}: {about.get('meaning', '')}")
     _save(fig, folder / "sweep.png")
     plt.close(fig)
@@ -412,10 +421,7 @@ def sweep_figures(folder: PathLike) -> List[Path]:
     lines = [f"# Sweep: {name}", "", about.get("meaning", ""), "",
              "The numbers are in sweep.csv (a row per value, subject and quantity) and sweep.json.", "",
              "![sweep.png](sweep.png)", ""]
-    path = folder / "index.md"
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text("\n".join(lines))
-    os.replace(temporary, path)
+    _atomically(folder / "index.md", lambda t: t.write_text("\n".join(lines)))
     return [folder / "sweep.png", folder / "figures.json", folder / "index.md"]
 
 

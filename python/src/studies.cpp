@@ -150,7 +150,7 @@ void bind_studies(py::module_& m) {
           s.calibration.pupil_noise_px = pupil_noise_px;
           s.calibrate = calibrate;
           const studies::SweepSettings sweep{parameter, start, stop, steps, noise_frames, seed};
-          for (const double v : {start, stop}) studies::with_parameter(world, parameter, v);
+          studies::check_sweep(world, sweep);
           const std::function<void()> step = progress_step(progress, studies::sweep_steps(world, s, sweep));
           auto run = std::make_shared<SweepRun>();
           {

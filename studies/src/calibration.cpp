@@ -299,7 +299,7 @@ SimulationRun model_calibration_run(const Scene& rig, const CalibrationSettings&
   SimulationRun run{"calibration", "model-based", {}, std::nullopt};
   Results& r = run.results;
   r.add("frames_used", static_cast<double>(frames_used));
-  r.add("frames_rendered", static_cast<double>(frames.calibration.size()));
+  r.add(settings.exact_features ? "frames_computed" : "frames_rendered", static_cast<double>(frames.calibration.size()));
   r.add("features", settings.exact_features ? std::string("exact: from the labels")
                                             : std::string("detected in the rendered frames"));
   r.add("kappa_horizontal", model.model.kappa_horizontal_rad / kDegree, "deg");
@@ -414,6 +414,10 @@ void score_position(const Scene& rig, const Scene& believed, const std::vector<F
       if (g.cornea_determined) {
         lateral.push_back(across);
         depth.push_back(along);
+      }
+      // Shares within 3 s.d. only of propagated uncertainties: the glint
+      // fit's alone, about a fixed axis, is no estimate's.
+      if (g.cornea_determined && settings.propagate_uncertainty) {
         ++cornea_with_sd;
         depth_within += std::abs(along) <= 3 * std::sqrt(depth_var) ? 1 : 0;
         lateral_within += std::abs(dot(e, across_x)) <= 3 * std::sqrt(variance_along(across_x)) &&
@@ -471,8 +475,10 @@ void score_position(const Scene& rig, const Scene& believed, const std::vector<F
     m.results.add("cornea_lateral_error_mean", sum_lateral / n, "mm");
     m.results.add("cornea_depth_error_mean", sum_depth / n, "mm");
     m.results.add("cornea_depth_error_rms", std::sqrt(sum_depth2 / n), "mm");
-    m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
-    m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
+    if (cornea_with_sd > 0) {
+      m.results.add("cornea_within_3sd_depth", 100.0 * depth_within / cornea_with_sd, "%");
+      m.results.add("cornea_within_3sd_lateral_both_axes", 100.0 * lateral_within / cornea_with_sd, "%");
+    }
   }
   out.runs.push_back(std::move(m));
   SimulationRun by_polynomial_run{name, "polynomial", {}, std::nullopt};

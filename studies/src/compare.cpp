@@ -327,16 +327,35 @@ void summarize_images(const renderer::RenderResult& world, const renderer::Rende
 
 }  // namespace
 
+namespace {
+
+// The eye with another anatomy, its centre of rotation, optical axis and
+// appearance kept.
+Eye with_anatomy(const Eye& eye, const EyeModel& model) {
+  Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
+  changed.set_appearance(eye.appearance());
+  return changed;
+}
+
+}  // namespace
+
 Scene with_one_surface_cornea(const Scene& scene, const Conicoid& anterior) {
+  const std::string given = "the assumed cornea (R, Q) = (" + check::format_number(anterior.radius_mm) + ", " +
+                            check::format_number(anterior.asphericity) + ")";
+  if (!(anterior.radius_mm > 0 && anterior.radius_mm < 100) || !(anterior.asphericity > -1 && anterior.asphericity < 10)) {
+    throw std::invalid_argument(given + ": must have the apex radius R in (0, 100) mm and the asphericity Q in (-1, 10)");
+  }
   Scene out = scene;
   for (Eye& eye : out.eyes) {
     EyeModel model = eye.model();
     model.anterior_cornea = anterior;
     model.posterior_cornea.reset();
     model.aqueous_index = 1.3375;
-    Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
-    changed.set_appearance(eye.appearance());
-    eye = changed;
+    if (const auto problem = anatomy_problem(model)) {
+      throw std::invalid_argument(given + ": the eye's anatomy refuses it: " + problem->key + " = " + problem->value +
+                                  ": " + problem->rule);
+    }
+    eye = with_anatomy(eye, model);
   }
   return out;
 }
@@ -413,9 +432,24 @@ std::vector<std::array<double, 3>> default_head_moves(const Scene& world) {
   return {move(Vector3{step, 0, 0}), move(Vector3{0, 0, 2 * step})};
 }
 
+namespace {
+
+// Why the study cannot calibrate on the world (empty: it can): what
+// calibration needs of a rig, beyond the eye models' rules.
+std::string cannot_calibrate(const Scene& world) {
+  if (!world.screen) return "the world has no screen for the eye to fixate";
+  if (world.illuminators.size() < 2) {
+    return "the world has " + std::to_string(world.illuminators.size()) +
+           " light(s): the cornea's centre needs the glints of two or more";
+  }
+  return "";
+}
+
+}  // namespace
+
 std::size_t compare_steps(const Scene& world, const CompareStudySettings& settings) {
   std::size_t steps = settings.images ? 2 : 0;
-  if (settings.calibrate && world.screen) steps += 2 * calibration_frames(settings.calibration);
+  if (settings.calibrate && cannot_calibrate(world).empty()) steps += 2 * calibration_frames(settings.calibration);
   return steps;
 }
 
@@ -435,12 +469,11 @@ CompareStudy run_compare(const Scene& world, const Scene& assumed, const Compare
     believing_assumed.tracker_rig = assumed;
     // A tracker believes a screen: the world's, where the assumed version has none.
     if (!assumed.screen) believing_assumed.tracker_rig->screen = world.screen;
-    try {
-      check_calibration_rig(world, "the world", believing_assumed);
-    } catch (const std::runtime_error& cannot) {
-      study.calibration_skipped = cannot.what();
-    }
+    study.calibration_skipped = cannot_calibrate(world);
     if (study.calibration_skipped.empty()) {
+      // The eye models' rules: each version's, named.
+      check_calibration_rig(world, "the world", believing_world);
+      check_calibration_rig(world, "the assumed version", believing_assumed);
       study.baseline = run_calibration(world, believing_world, step);
       study.assumed = run_calibration(world, believing_assumed, step);
       const Screen& screen = *world.screen;
@@ -472,6 +505,14 @@ CompareStudy run_compare(const Scene& world, const Scene& assumed, const Compare
   }
 
   if (settings.images) {
+    const Intrinsics& w = world.cameras[static_cast<std::size_t>(settings.field.camera)].intrinsics();
+    const Intrinsics& a = assumed.cameras[static_cast<std::size_t>(settings.field.camera)].intrinsics();
+    if (w.width != a.width || w.height != a.height) {
+      throw std::invalid_argument("compare: images of " + std::to_string(w.width) + " x " + std::to_string(w.height) +
+                                  " px (the world) and " + std::to_string(a.width) + " x " +
+                                  std::to_string(a.height) +
+                                  " px (the assumed version) have no difference image; compare without images");
+    }
     study.world_image = renderer::render(world, settings.field.camera, settings.render);
     if (step) step();
     study.assumed_image = renderer::render(assumed, settings.field.camera, settings.render);
@@ -528,13 +569,19 @@ Scene with_parameter(const Scene& world, const std::string& parameter, double va
   const auto fail = [&](const std::string& rule) {
     throw std::invalid_argument("sweep: " + parameter + " = " + check::format_number(value) + ": " + rule);
   };
+  const auto& known = sweep_parameters();
+  if (std::none_of(known.begin(), known.end(), [&](const SweepParameter& p) { return p.name == parameter; })) {
+    std::string names;
+    for (const SweepParameter& p : known) names += (names.empty() ? "" : ", ") + p.name;
+    throw std::invalid_argument("sweep: unknown parameter \"" + parameter + "\" (known: " + names + ")");
+  }
   if (!std::isfinite(value)) fail("must be a finite number");
   Scene out = world;
   if (parameter.starts_with("led_offset_")) {
     if (out.illuminators.empty()) fail("the scene has no light to move");
     Point3& at = out.illuminators.front().position;
     (parameter == "led_offset_x" ? at.x : parameter == "led_offset_y" ? at.y : at.z) += value;
-    if (parameter == "led_offset_x" || parameter == "led_offset_y" || parameter == "led_offset_z") return out;
+    return out;
   }
   if (world.eyes.size() != 1) fail("the scene must have one eye");
   const Eye& eye = world.eyes.front();
@@ -549,11 +596,7 @@ Scene with_parameter(const Scene& world, const std::string& parameter, double va
                   : parameter == "kappa_horizontal"     ? &m.kappa_horizontal_rad
                   : parameter == "kappa_vertical"       ? &m.kappa_vertical_rad
                                                         : nullptr;
-  if (!field) {
-    std::string known;
-    for (const SweepParameter& p : sweep_parameters()) known += (known.empty() ? "" : ", ") + p.name;
-    throw std::invalid_argument("sweep: unknown parameter \"" + parameter + "\" (known: " + known + ")");
-  }
+  if (!field) throw std::logic_error("sweep: " + parameter + " is in sweep_parameters but not in with_parameter");
   if (parameter == "aqueous_index" && !(value > 1)) fail("must be more than 1");
   const bool kappa = parameter.starts_with("kappa_");
   if (kappa && !(std::abs(value) <= 45)) fail("must be within 45 deg");
@@ -565,15 +608,11 @@ Scene with_parameter(const Scene& world, const std::string& parameter, double va
   if (const auto problem = anatomy_problem(m)) {
     fail("the eye's anatomy refuses it: " + problem->key + " = " + problem->value + ": " + problem->rule);
   }
-  Eye changed = Eye::with_rotation_center(m, eye.rotation_center(), eye.optical_axis());
-  changed.set_appearance(eye.appearance());
-  out.eyes = {changed};
+  out.eyes = {with_anatomy(eye, m)};
   return out;
 }
 
-namespace {
-
-void check_sweep(const SweepSettings& s) {
+void check_sweep(const Scene& world, const SweepSettings& s) {
   const auto fail = [&](const std::string& rule) { throw std::invalid_argument("sweep: " + rule); };
   if (s.steps < 2 || s.steps > 1000) fail("steps = " + std::to_string(s.steps) + ": must be from 2 to 1000");
   if (!std::isfinite(s.from) || !std::isfinite(s.to) || s.from == s.to) {
@@ -583,7 +622,10 @@ void check_sweep(const SweepSettings& s) {
   if (s.noise_frames < 0 || s.noise_frames > 10000) {
     fail("noise_frames = " + std::to_string(s.noise_frames) + ": must be from 0 to 10000");
   }
+  for (const double v : {s.from, s.to}) with_parameter(world, s.parameter, v);
 }
+
+namespace {
 
 double sweep_value(const SweepSettings& s, int k) {
   // Weighted ends over the count: -0.5 to 0 in ten steps gives -0.35, not
@@ -603,7 +645,7 @@ std::size_t sweep_steps(const Scene& world, const CompareStudySettings& settings
 
 Sweep run_sweep(const Scene& world, const CompareStudySettings& settings, const SweepSettings& sweep,
                 const std::function<void()>& step) {
-  check_sweep(sweep);
+  check_sweep(world, sweep);
   Sweep out;
   out.parameter = sweep.parameter;
   for (const SweepParameter& p : sweep_parameters()) {

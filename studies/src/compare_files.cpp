@@ -5,6 +5,7 @@
 
 #include "purkinje/models/output_file.h"
 #include "purkinje/studies/compare.h"
+#include "purkinje/studies/output_checks.h"
 
 namespace purkinje::studies {
 
@@ -32,6 +33,17 @@ void write_compare(const std::filesystem::path& dir, const Scene& world, const S
   add_text("summary.csv", simulation_csv(study.summary));
   add_text("summary.txt", simulation_text(study.summary));  // last: in place only when all the others are
   files.commit();
+  // The outputs this run did not write, figures included (drawn anew
+  // from these files, or not at all).
+  std::vector<std::string> stale = {"displacements.png", "gaze_change.png", "images.png", "flip.gif",
+                                    "figures.json", "index.md"};
+  if (study.gaze.empty()) stale.push_back("gaze.csv");
+  if (!study.world_image) {
+    for (const char* name : {"world.png", "world.exr", "world.json", "assumed.png", "assumed.exr", "assumed.json"}) {
+      stale.push_back(name);
+    }
+  }
+  remove_stale_outputs(dir, stale);
 }
 
 }  // namespace purkinje::studies
@@ -47,6 +59,7 @@ void write_sweep(const std::filesystem::path& dir, const Sweep& sweep) {
   files.add(dir / "sweep.csv", [csv](const std::filesystem::path& temporary) { write_bytes(temporary, csv); });
   files.add(dir / "sweep.json", [json](const std::filesystem::path& temporary) { write_bytes(temporary, json); });
   files.commit();
+  remove_stale_outputs(dir, {"sweep.png", "figures.json", "index.md"});
 }
 
 }  // namespace purkinje::studies

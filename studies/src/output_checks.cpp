@@ -7,6 +7,14 @@ namespace purkinje::studies {
 
 namespace fs = std::filesystem;
 
+void remove_stale_outputs(const fs::path& folder, const std::vector<std::string>& files) {
+  for (const std::string& name : files) {
+    std::error_code ec;
+    fs::remove(folder / name, ec);  // false without error when it does not exist
+    if (ec) throw OutputError((folder / name).string() + ": the last run's file cannot be removed: " + ec.message());
+  }
+}
+
 bool same_file(const fs::path& a, const fs::path& b) {
   std::error_code ec;
   return fs::equivalent(a, b, ec) && !ec;

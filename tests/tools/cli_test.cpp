@@ -738,6 +738,15 @@ TEST_F(Cli, CompareWritesItsTablesImagesAndFigures) {
 #else
   EXPECT_NE(out().find("figures: not drawn"), std::string::npos) << out();
 #endif
+  // Run again into the folder without images, calibration or figures: the
+  // last run's files of those are gone, not left beside the new ones.
+  ASSERT_EQ(run("compare " + scene + " -o " + quoted(output_dir_.string()) +
+                " --grid 2 --no-images --no-calibration --no-figures --quiet"),
+            0)
+      << err();
+  std::vector<std::string> left = output_dir_entries();
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{"displacements.csv", "summary.csv", "summary.json", "summary.txt"}));
 }
 
 TEST_F(Cli, CompareRefusesBadOptionsAndVersionsThatCannotBeCompared) {
@@ -746,6 +755,13 @@ TEST_F(Cli, CompareRefusesBadOptionsAndVersionsThatCannotBeCompared) {
   EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-cornea 7.8"), 2);
   EXPECT_NE(err().find("--assumed-cornea \"7.8\": must be \"R,Q\""), std::string::npos) << err();
   EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-cornea 7.8,-1"), 2);
+  EXPECT_NE(err().find("--assumed-cornea \"7.8,-1\": the assumed cornea (R, Q) = (7.8, -1): must have the apex "
+                       "radius R in (0, 100) mm and the asphericity Q in (-1, 10)"),
+            std::string::npos)
+      << err();
+  // A cornea whose cap ends inside the limbus: the anatomy's rule, named.
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --assumed-cornea 7.8,3"), 2);
+  EXPECT_NE(err().find("the eye's anatomy refuses it: cornea.limbus_radius_mm"), std::string::npos) << err();
   EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --camera nope"), 2);
   EXPECT_NE(err().find("has no camera of that name"), std::string::npos) << err();
   EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --head-move 1,2"), 2);
@@ -771,10 +787,20 @@ TEST_F(Cli, CompareRefusesBadOptionsAndVersionsThatCannotBeCompared) {
   EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius"), 2);
   EXPECT_NE(err().find("must be \"NAME=FROM:TO:STEPS\""), std::string::npos) << err();
   EXPECT_EQ(run("compare " + scene + " " + scene + " -o " + out_dir + " --sweep cornea_radius=7:8:3"), 2);
-  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep corneal_radius=7:8:3"), 1);
-  EXPECT_NE(err().find("unknown parameter \"corneal_radius\" (known: cornea_radius"), std::string::npos) << err();
-  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius=-1:8:3"), 1);
+  EXPECT_NE(err().find("--sweep: the assumed versions are the world with the parameter swept: no ASSUMED"),
+            std::string::npos)
+      << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius=7:8:3 --samples 4"), 2);
+  EXPECT_NE(err().find("excludes"), std::string::npos) << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep corneal_radius=7:8:3"), 2);
+  EXPECT_NE(err().find("--sweep \"corneal_radius=7:8:3\": sweep: unknown parameter \"corneal_radius\" (known: "
+                       "cornea_radius"),
+            std::string::npos)
+      << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius=-1:8:3"), 2);
   EXPECT_NE(err().find("cornea_radius = -1: the eye's anatomy refuses it"), std::string::npos) << err();
+  EXPECT_EQ(run("compare " + scene + " -o " + out_dir + " --sweep cornea_radius=7:7:3"), 2);
+  EXPECT_NE(err().find("must be two different finite numbers"), std::string::npos) << err();
   EXPECT_TRUE(output_dir_entries().empty());
 }
 

@@ -128,6 +128,30 @@ TEST(ModelGaze, ThePupilsImageAndTheTrueCentreGiveTheTruePupilAndAxis) {
   }
 }
 
+// A conicoid cornea: the outline's axis is a fixed point reached by plain
+// and Aitken steps; it must be the truth's (the scene's own refraction
+// solver, independent of the tracker's), and a fixed point indeed: started
+// from it, the first plain step stays within the tolerance.
+TEST(ModelGaze, ThroughAConicoidTheOutlineGivesTheTrueAxisAtAFixedPoint) {
+  EyeModel conicoid = GazeRig().eye;
+  conicoid.anterior_cornea.asphericity = -0.26;
+  const GazeRig s(conicoid);
+  for (const ScreenPoint& target : s.screen.grid(4, 4)) {
+    const Eye eye = Eye::fixating(s.eye, s.home, s.screen.at(target));
+    const std::optional<GazeFeatures> f = exact_gaze_features(s.view(s.home, target));
+    ASSERT_TRUE(f);
+    const std::optional<OpticalAxis> axis =
+        optical_axis_from_pupil_outline(s.rig.cameras[0], eye.cornea_center(), f->pupil_outline, s.tracker_eye());
+    ASSERT_TRUE(axis);
+    EXPECT_LT(distance(axis->pupil_center, eye.pupil_center()), 1e-8);
+    EXPECT_LT(angle_between(axis->direction, eye.optical_axis()), 1e-9);
+    const std::optional<OpticalAxis> again = optical_axis_from_pupil_outline(
+        s.rig.cameras[0], eye.cornea_center(), f->pupil_outline, s.tracker_eye(), axis->direction);
+    ASSERT_TRUE(again);
+    EXPECT_LT(angle_between(again->direction, axis->direction), 1e-11);
+  }
+}
+
 // Gaze errors over a 16 x 16 screen grid with the eye rotating about
 // `center`, for an estimator of the screen point from a frame's features.
 Errors errors_over_grid(const GazeRig& s, const Point3& center, PupilFeature feature,

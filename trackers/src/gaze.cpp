@@ -201,8 +201,17 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
   const double depth = model.pupil_depth_mm;
   double change = INFINITY;
   std::optional<Vector3> last_move;
+  std::optional<UnitVector3> before_jump;  // the plain step's axis, while an Aitken step is tried
+  bool jumps = true;
   for (int iteration = 0; iteration < 200; ++iteration) {
-    if (model.cornea_asphericity != 0 && iteration > 0 && !trace()) return std::nullopt;
+    if (model.cornea_asphericity != 0 && iteration > 0 && !trace()) {
+      // A jump that left the cornea: back to the plain step, no more jumps.
+      if (!before_jump) return std::nullopt;
+      axis = before_jump;
+      jumps = false;
+      if (!trace()) return std::nullopt;
+    }
+    before_jump.reset();
     // The least-squares circle by its normal equations: 3 x 3, whatever
     // the outline's length (the points lie about the axis, so they are
     // well conditioned).
@@ -241,10 +250,13 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
     // axis overshoots and swings back): the rest of the way, r / (1 - r)
     // of this step, taken at once (Aitken), then two plain steps to measure
     // r again. The test above still decides when it has converged.
-    if (last_move) {
+    if (last_move && jumps) {
       const double r = dot(move, *last_move) / last_move->squared_norm();
       if (std::abs(r) < 0.5 && std::abs(dot(move, *last_move)) > 0.9 * move.norm() * last_move->norm()) {
-        if (const auto jumped = UnitVector3::try_normalize(axis->vector() + move * (r / (1 - r)))) axis = jumped;
+        if (const auto jumped = UnitVector3::try_normalize(axis->vector() + move * (r / (1 - r)))) {
+          before_jump = axis;
+          axis = jumped;
+        }
         last_move.reset();
         change = INFINITY;
         continue;

@@ -71,6 +71,8 @@ std::string displacement_csv(const DisplacementField& field);
 // The scene with each eye's cornea one refracting surface, `anterior`,
 // with the keratometric index 1.3375 behind it (the classic tracker's
 // cornea), each eye's rotation centre, optical axis and appearance kept.
+// Throws std::invalid_argument for R outside (0, 100) mm, Q outside
+// (-1, 10), or an eye the anatomy rules then refuse (naming the rule).
 Scene with_one_surface_cornea(const Scene& scene, const Conicoid& anterior);
 
 // The scene with its eye's anatomy from `model`: an eye-model preset's
@@ -133,9 +135,13 @@ struct CompareStudy {
 
 // The study. Throws std::invalid_argument as displacement_field and
 // check_calibration_rig do (the calibration settings' ranges, the tracker
-// rig's numbers); what the renderer and the calibration throw passes
-// through. `step` is called after each render (two) and each calibration
-// frame.
+// rig's numbers) and for images of cameras of different sizes;
+// std::runtime_error, naming "the world" or "the assumed version", for an
+// eye whose cornea the tracker cannot take (check_calibration_rig); what
+// the renderer and the calibration throw passes through. Calibration is
+// skipped, and `calibration_skipped` says why, only for a world without a
+// screen or without two lights. `step` is called after each render (two)
+// and each calibration frame.
 CompareStudy run_compare(const Scene& world, const Scene& assumed, const CompareStudySettings& settings = {},
                          const std::function<void()>& step = {});
 
@@ -197,6 +203,11 @@ struct Sweep {
   std::optional<DetectorNoise> noise;                 // nullopt: not measured
   std::optional<double> gaze_noise_deg;               // the reported model-based gaze s.d. at home, median
 };
+
+// Throws std::invalid_argument naming the rule for sweep settings out of
+// range (steps 2 to 1000, two different finite ends, noise frames 0 to
+// 10000) and for ends with_parameter refuses: before any work.
+void check_sweep(const Scene& world, const SweepSettings& sweep);
 
 // The sweep: `settings` for each value's study (images are left out; the
 // feature noise its uncertainty assumes is the measured one, unless

@@ -35,6 +35,12 @@ std::optional<Refusal> check_output_folder(const std::filesystem::path& folder,
                                            const std::vector<std::string>& files,
                                            const std::vector<std::filesystem::path>& inputs);
 
+// Removes those of `files` in `folder` that a run did not write (a
+// rerun with fewer outputs must not leave the last run's beside its own,
+// e.g. figures drawn from other data). Throws OutputError naming the
+// file when one cannot be removed.
+void remove_stale_outputs(const std::filesystem::path& folder, const std::vector<std::string>& files);
+
 // Whether two paths name the same existing file or folder.
 bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 

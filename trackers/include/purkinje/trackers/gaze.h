@@ -137,8 +137,8 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
 // covariance and the screen point's are propagated from all the features;
 // the cornea's even when the gaze misses the screen. Without, or where the estimate
 // itself is not valid (the pupil's ray misses the model), the cornea's
-// covariance is the glint fit's, about a fixed axis, from FeatureNoise's
-// default glint noise; a warning says when propagation failed. Throws
+// covariance is the glint fit's, about a fixed axis, from `noise` (or
+// FeatureNoise's default); a warning says when propagation failed. Throws
 // std::invalid_argument for a noise that is no deviation (glint_px and
 // pupil_px finite and > 0, glint_sd_scale finite and >= 0).
 ModelGaze estimate_model_gaze(const Camera& camera, const std::vector<Illuminator>& lights,

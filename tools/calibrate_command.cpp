@@ -83,12 +83,7 @@ int run_calibrate(CalibrateRequest request) {
     write_file_atomically(dir / "frames.csv", study.frames_csv);
     studies::remove_stale_outputs(dir, {"gaze_error.png", "figures.json"});  // drawn anew, or not at all
   });
-  std::optional<std::string> no_figures;
-  if (request.no_figures) {
-    no_figures = "--no-figures";
-  } else {
-    writing([&] { no_figures = draw_figures("calibration", dir); });
-  }
+  const std::optional<std::string> no_figures = draw_figures_unless(request.no_figures, "calibration", dir);
   std::cout << text << "\nwrote " << (dir / "calibration.txt").string()
             << ", calibration.json, calibration.csv, frames.csv\n"
             << (no_figures ? "figures: not drawn: " + *no_figures : std::string("figures: gaze_error.png, figures.json"))

@@ -110,12 +110,7 @@ int run_sweep(CompareRequest request) {
   }
   const fs::path dir(request.output_dir);
   writing([&] { studies::write_sweep(dir, sweep); });
-  std::optional<std::string> no_figures;
-  if (request.no_figures) {
-    no_figures = "--no-figures";
-  } else {
-    writing([&] { no_figures = draw_figures("sweep", dir); });
-  }
+  const std::optional<std::string> no_figures = draw_figures_unless(request.no_figures, "sweep", dir);
   std::cout << studies::sweep_json(sweep) << "\nwrote " << (dir / "sweep.csv").string() << " and sweep.json\n"
             << (no_figures ? "figures: not drawn: " + *no_figures : std::string("figures: sweep.png; index.md")) << "\n";
   return kOk;
@@ -159,12 +154,7 @@ int run_compare(CompareRequest request) {
   const fs::path dir(request.output_dir);
   const std::string text = studies::simulation_text(study.summary);
   writing([&] { studies::write_compare(dir, world, assumed, study, settings); });
-  std::optional<std::string> no_figures;
-  if (request.no_figures) {
-    no_figures = "--no-figures";
-  } else {
-    writing([&] { no_figures = draw_figures("compare", dir); });
-  }
+  const std::optional<std::string> no_figures = draw_figures_unless(request.no_figures, "compare", dir);
   std::cout << text << "\nwrote " << (dir / "summary.txt").string() << ", summary.json, summary.csv, displacements.csv"
             << (study.gaze.empty() ? "" : ", gaze.csv")
             << (study.world_image ? ", world and assumed .png, .exr and .json" : "") << "\n"
@@ -184,13 +174,14 @@ Command add_compare_command(CLI::App& app) {
       "compare", "Compare a world rig with a version the tracker assumes: feature displacements, gaze cost, images");
   compare->footer(std::string("WORLD is the rig as it is; ASSUMED (default: WORLD) a version of it that\n"
                               "differs in anything (cornea, kappa, a camera's distortion, an LED moved), or\n"
-                              "--assumed-cornea changes its eye. Over a grid of gaze targets both eyes fixate\n"
-                              "the same target: each glint and the pupil's displacement in the image; both\n"
-                              "tracker methods calibrated on the world's exact features, believing the world\n"
-                              "and believing the assumed version: the gaze change at home and after head\n"
-                              "moves; both versions rendered with one seed. Writes DIR/summary.txt (.json,\n"
-                              ".csv), displacements.csv, gaze.csv, world/assumed .png/.exr/.json, and the\n"
-                              "figures with index.md (docs/compare.md).\n\n") +
+                              "--assumed-eye/--assumed-cornea change its eye (--world-eye the world's); --sweep\n"
+                              "runs the study over one parameter's values instead. Over a grid of gaze targets\n"
+                              "both eyes fixate the same target: each glint and the pupil's displacement in\n"
+                              "the image; both tracker methods calibrated on the world's exact features,\n"
+                              "believing the world and believing the assumed version: the gaze change at home\n"
+                              "and after head moves; both versions rendered with one seed. Writes\n"
+                              "DIR/summary.txt (.json, .csv), displacements.csv, gaze.csv, world/assumed\n"
+                              ".png/.exr/.json, and the figures with index.md (docs/compare.md).\n\n") +
                   kExitCodes);
   compare->add_option("WORLD", request->world_file, "Scene file: the rig as it is")->required();
   compare->add_option("ASSUMED", request->assumed_file, "Scene file: the rig as the tracker assumes it");

@@ -2,6 +2,8 @@
 
 #include "figures.h"
 
+#include "cli.h"
+
 #include <spawn.h>
 #include <sys/wait.h>
 
@@ -62,6 +64,14 @@ std::optional<std::string> draw_figures(const std::string& study, const std::fil
   }
   return std::nullopt;
 #endif
+}
+
+std::optional<std::string> draw_figures_unless(bool skip, const std::string& study,
+                                               const std::filesystem::path& folder) {
+  if (skip) return std::string("--no-figures");
+  std::optional<std::string> not_drawn;
+  writing([&] { not_drawn = draw_figures(study, folder); });
+  return not_drawn;
 }
 
 }  // namespace purkinje::tools

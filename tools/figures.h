@@ -15,4 +15,10 @@ namespace purkinje::tools {
 // std::runtime_error when the drawing fails (its messages on stderr).
 std::optional<std::string> draw_figures(const std::string& study, const std::filesystem::path& folder);
 
+// A command's figures: none with --no-figures (`skip`; then "--no-figures"
+// is why), else draw_figures as an output step (its failure an
+// OutputError, exit code 3).
+std::optional<std::string> draw_figures_unless(bool skip, const std::string& study,
+                                               const std::filesystem::path& folder);
+
 }  // namespace purkinje::tools

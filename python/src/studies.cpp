@@ -10,6 +10,28 @@
 #include "purkinje/studies/compare.h"
 
 namespace purkinje::python {
+namespace {
+
+// The compare study's settings from the keywords compare and sweep share.
+studies::CompareStudySettings study_settings(const Scene& world, int grid, double cap_deg, int camera, int gaze_grid,
+                                             int calibration_grid,
+                                             const std::optional<std::vector<std::array<double, 3>>>& head_moves,
+                                             std::optional<double> glint_noise_px,
+                                             std::optional<double> pupil_noise_px, bool calibrate) {
+  studies::CompareStudySettings s;
+  s.field.grid = grid;
+  s.field.cap_deg = cap_deg;
+  s.field.camera = camera;
+  s.calibration.grid = gaze_grid;
+  s.calibration.calibration_grid = calibration_grid;
+  s.calibration.head_moves = head_moves ? *head_moves : studies::default_head_moves(world);
+  s.calibration.glint_noise_px = glint_noise_px;
+  s.calibration.pupil_noise_px = pupil_noise_px;
+  s.calibrate = calibrate;
+  return s;
+}
+
+}  // namespace
 
 void bind_studies(py::module_& m) {
   m.def("_displacement_csv",
@@ -90,15 +112,8 @@ void bind_studies(py::module_& m) {
                              ? studies::with_one_surface_cornea(assumed, {(*assumed_cornea)[0], (*assumed_cornea)[1]})
                              : assumed;
           studies::CompareStudySettings& s = run->settings;
-          s.field.grid = grid;
-          s.field.cap_deg = cap_deg;
-          s.field.camera = camera;
-          s.calibration.grid = gaze_grid;
-          s.calibration.calibration_grid = calibration_grid;
-          s.calibration.head_moves = head_moves ? *head_moves : studies::default_head_moves(world);
-          s.calibration.glint_noise_px = glint_noise_px;
-          s.calibration.pupil_noise_px = pupil_noise_px;
-          s.calibrate = calibrate;
+          s = study_settings(world, grid, cap_deg, camera, gaze_grid, calibration_grid, head_moves, glint_noise_px,
+                             pupil_noise_px, calibrate);
           s.images = images;
           if (samples < 1 || samples > 4096) {
             throw std::invalid_argument("compare: samples = " + std::to_string(samples) + ": must be from 1 to 4096");
@@ -139,16 +154,9 @@ void bind_studies(py::module_& m) {
            std::uint64_t seed, int grid, double cap_deg, int camera, int gaze_grid, int calibration_grid,
            const std::optional<std::vector<std::array<double, 3>>>& head_moves, std::optional<double> glint_noise_px,
            std::optional<double> pupil_noise_px, bool calibrate, const py::object& progress) {
-          studies::CompareStudySettings s;
-          s.field.grid = grid;
-          s.field.cap_deg = cap_deg;
-          s.field.camera = camera;
-          s.calibration.grid = gaze_grid;
-          s.calibration.calibration_grid = calibration_grid;
-          s.calibration.head_moves = head_moves ? *head_moves : studies::default_head_moves(world);
-          s.calibration.glint_noise_px = glint_noise_px;
-          s.calibration.pupil_noise_px = pupil_noise_px;
-          s.calibrate = calibrate;
+          const studies::CompareStudySettings s = study_settings(world, grid, cap_deg, camera, gaze_grid,
+                                                                 calibration_grid, head_moves, glint_noise_px,
+                                                                 pupil_noise_px, calibrate);
           const studies::SweepSettings sweep{parameter, start, stop, steps, noise_frames, seed};
           studies::check_sweep(world, sweep);
           const std::function<void()> step = progress_step(progress, studies::sweep_steps(world, s, sweep));

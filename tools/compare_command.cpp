@@ -159,7 +159,7 @@ int run_compare(CompareRequest request) {
             << (study.gaze.empty() ? "" : ", gaze.csv")
             << (study.world_image ? ", world and assumed .png, .exr and .json" : "") << "\n"
             << (no_figures ? "figures: not drawn: " + *no_figures
-                           : std::string("figures: displacements.png") + (study.gaze.empty() ? "" : ", gaze_change.png") +
+                           : std::string("figures: displacements.png") + (study.gaze.empty() ? "" : ", gaze_change.png, gaze_error.png") +
                                  (study.world_image ? ", images.png, flip.gif" : "") + ", figures.json; index.md")
             << "\n";
   return kOk;

@@ -333,6 +333,7 @@ def _index(folder: Path, figures: Sequence[str]) -> None:
         "flip.gif": "The eye in both versions, alternating.",
         "displacements.png": "Where each feature moves in the image over the gaze grid.",
         "gaze_change.png": "What the difference moves the tracker's gaze by, per head position and method.",
+        "gaze_error.png": "The tracker's gaze error believing the assumed version, per head position and method.",
     }
     for name in figures:
         lines += [f"## {name}", "", captions.get(name, ""), "", f"![{name}]({name})", ""]
@@ -359,6 +360,20 @@ def compare_figures(folder: PathLike) -> List[Path]:
                     "u": (rows["believing_assumed_x_mm"] - rows["believing_world_x_mm"]).to_numpy(float),
                     "v": (rows["believing_assumed_y_mm"] - rows["believing_world_y_mm"]).to_numpy(float),
                     "heat": rows["change_deg"].to_numpy(float)}))
+        errors = []
+        for position in dict.fromkeys(gaze["position"]):
+            for method in METHODS:
+                rows = gaze[(gaze["position"] == position) & (gaze["method"] == method)]
+                x = rows["target_x_mm"].to_numpy(float)
+                y = rows["target_y_mm"].to_numpy(float)
+                errors.append((position, method, {
+                    "x": x, "y": y, "u": rows["believing_assumed_x_mm"].to_numpy(float) - x,
+                    "v": rows["believing_assumed_y_mm"].to_numpy(float) - y,
+                    "heat": rows["error_believing_assumed_deg"].to_numpy(float)}))
+        figures["gaze_error.png"] = {"panels": _gaze_figure(
+            plt, errors, folder / "gaze_error.png", "gaze error (deg)",
+            "Gaze error believing the assumed version: arrows from each target to the estimate, on the screen\n"
+            "(each panel its own scale and colours)", {m: "no error" for m in METHODS})}
         figures["gaze_change.png"] = {"panels": _gaze_figure(
             plt, panels, folder / "gaze_change.png", "gaze change (deg)",
             "What believing the assumed version moves gaze by: arrows from the estimate believing the world\n"

@@ -12,7 +12,7 @@ namespace purkinje::studies {
 std::vector<std::string> compare_outputs() {
   return {"displacements.csv", "gaze.csv",          "summary.txt",     "summary.json", "summary.csv",
           "world.png",         "world.exr",         "world.json",      "assumed.png",  "assumed.exr",
-          "assumed.json",      "displacements.png", "gaze_change.png", "images.png",   "flip.gif",
+          "assumed.json",      "displacements.png", "gaze_change.png", "gaze_error.png", "images.png", "flip.gif",
           "figures.json",      "index.md"};
 }
 
@@ -35,7 +35,7 @@ void write_compare(const std::filesystem::path& dir, const Scene& world, const S
   files.commit();
   // The outputs this run did not write, figures included (drawn anew
   // from these files, or not at all).
-  std::vector<std::string> stale = {"displacements.png", "gaze_change.png", "images.png", "flip.gif",
+  std::vector<std::string> stale = {"displacements.png", "gaze_change.png", "gaze_error.png", "images.png", "flip.gif",
                                     "figures.json", "index.md"};
   if (study.gaze.empty()) stale.push_back("gaze.csv");
   if (!study.world_image) {

@@ -696,6 +696,19 @@ TEST_F(Cli, CompareWritesItsTablesImagesAndFigures) {
 #ifdef PURKINJE_FIGURES
   EXPECT_EQ(png_size(read(output_dir_ / "displacements.png")), (std::pair<int, int>{1800, 840}));
   EXPECT_EQ(png_size(read(output_dir_ / "gaze_change.png")), (std::pair<int, int>{1200, 1260}));
+  EXPECT_EQ(png_size(read(output_dir_ / "gaze_error.png")), (std::pair<int, int>{1200, 1260}));
+  // The error map's arrows run from each target to the estimate believing
+  // the assumed version: each panel scaled by its own longest.
+  for (const json& panel : json::parse(read(output_dir_ / "figures.json"))["gaze_error.png"]["panels"]) {
+    const std::string title = panel["title"];
+    double longest = 0;
+    for (const auto& row : gaze) {
+      if (title != row.at("method") + ", " + row.at("position")) continue;
+      longest = std::max(longest, std::hypot(std::stod(row.at("believing_assumed_x_mm")) - std::stod(row.at("target_x_mm")),
+                                             std::stod(row.at("believing_assumed_y_mm")) - std::stod(row.at("target_y_mm"))));
+    }
+    EXPECT_NEAR(panel["longest_arrow"].get<double>(), longest, 1e-9 * longest) << title;
+  }
   EXPECT_EQ(png_size(read(output_dir_ / "images.png")), (std::pair<int, int>{1500, 900}));
   EXPECT_EQ(read(output_dir_ / "flip.gif").substr(0, 6), "GIF89a");
   // Each panel's arrows are scaled by its own longest (figures.json, from
@@ -732,7 +745,7 @@ TEST_F(Cli, CompareWritesItsTablesImagesAndFigures) {
     }
   }
   const std::string index = read(output_dir_ / "index.md");
-  for (const char* figure : {"displacements.png", "gaze_change.png", "images.png", "flip.gif"}) {
+  for (const char* figure : {"displacements.png", "gaze_change.png", "gaze_error.png", "images.png", "flip.gif"}) {
     EXPECT_NE(index.find(std::string("](") + figure + ")"), std::string::npos) << figure;
   }
 #else

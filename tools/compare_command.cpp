@@ -64,6 +64,23 @@ int camera_index(const Scene& world, const CompareRequest& request) {
                                       " has no camera of that name");
 }
 
+// The world as the options make it: WORLD, with --world-eye's anatomy.
+Scene read_world(const CompareRequest& request) {
+  const Scene as_read = load_scene(request.world_file);
+  return request.world_eye.empty() ? as_read : studies::with_eye_model(as_read, request.world_eye);
+}
+
+// The options both a comparison and a sweep take, into the settings.
+void read_shared_options(CompareRequest& request, const Scene& world) {
+  studies::CompareStudySettings& settings = request.settings;
+  settings.field.camera = camera_index(world, request);
+  if (request.head_move_texts.empty()) settings.calibration.head_moves = studies::default_head_moves(world);
+  for (const std::string& move : request.head_move_texts) {
+    settings.calibration.head_moves.push_back(numbers<3>("--head-move", move, "must be three numbers \"x,y,z\" in mm"));
+  }
+  settings.calibrate = !request.no_calibration;
+}
+
 // --sweep "NAME=FROM:TO:STEPS" into the sweep's settings.
 void read_sweep(CompareRequest& request) {
   const std::string& text = request.sweep_text;
@@ -88,15 +105,9 @@ int run_sweep(CompareRequest request) {
   std::vector<fs::path> inputs = {request.world_file};
   if (!request.world_eye.empty()) inputs.push_back(request.world_eye);
   refuse(check_output_folder(request.output_dir, {}, studies::sweep_outputs(), inputs));
-  const Scene world = request.world_eye.empty() ? load_scene(request.world_file)
-                                                : studies::with_eye_model(load_scene(request.world_file), request.world_eye);
-  studies::CompareStudySettings& settings = request.settings;
-  if (request.head_move_texts.empty()) settings.calibration.head_moves = studies::default_head_moves(world);
-  for (const std::string& move : request.head_move_texts) {
-    settings.calibration.head_moves.push_back(numbers<3>("--head-move", move, "must be three numbers \"x,y,z\" in mm"));
-  }
-  settings.calibrate = !request.no_calibration;
-  settings.field.camera = camera_index(world, request);
+  const Scene world = read_world(request);
+  read_shared_options(request, world);
+  const studies::CompareStudySettings& settings = request.settings;
   // Settings or ends the sweep refuses are named before any work.
   try {
     studies::check_sweep(world, request.sweep);
@@ -124,9 +135,9 @@ int run_compare(CompareRequest request) {
     if (!input.empty()) inputs.push_back(input);  // an eye model by a preset's name names no file: no harm
   }
   refuse(check_output_folder(request.output_dir, {}, studies::compare_outputs(), inputs));
-  const Scene as_read = load_scene(request.world_file);
-  Scene assumed = request.assumed_file.empty() ? as_read : load_scene(request.assumed_file);
-  const Scene world = request.world_eye.empty() ? as_read : studies::with_eye_model(as_read, request.world_eye);
+  const Scene world = read_world(request);
+  // The assumed version starts from ASSUMED, or from WORLD as read.
+  Scene assumed = load_scene(request.assumed_file.empty() ? request.world_file : request.assumed_file);
   if (!request.assumed_eye.empty()) assumed = studies::with_eye_model(assumed, request.assumed_eye);
   if (!request.assumed_cornea_text.empty()) {
     const auto c = numbers<2>("--assumed-cornea", request.assumed_cornea_text, "must be \"R,Q\", e.g. 7.8,0");
@@ -136,15 +147,7 @@ int run_compare(CompareRequest request) {
       throw CommandError(kUsageError, "--assumed-cornea \"" + request.assumed_cornea_text + "\": " + refused.what());
     }
   }
-  settings.field.camera = camera_index(world, request);
-  if (request.head_move_texts.empty()) {
-    settings.calibration.head_moves = studies::default_head_moves(world);
-  }
-  for (const std::string& move : request.head_move_texts) {
-    settings.calibration.head_moves.push_back(
-        numbers<3>("--head-move", move, "must be three numbers \"x,y,z\" in mm"));
-  }
-  settings.calibrate = !request.no_calibration;
+  read_shared_options(request, world);
   settings.images = !request.no_images;
   studies::CompareStudy study;
   {

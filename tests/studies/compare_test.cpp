@@ -480,9 +480,10 @@ TEST(CompareEyeModel, APresetOrAFileReplacesTheAnatomyAndKeepsThePlaceAndPupil) 
     return dir + name;
   };
   // The file naming the scene's own model and pupil: the same anatomy.
-  const Scene same = with_eye_model(bundled("remote"), file("navarro.json", R"({"model": "navarro", "pupil": {"radius_mm": 2.0}})"));
+  const Scene remote = bundled("remote");
+  const Scene same = with_eye_model(remote, file("navarro.json", R"({"model": "navarro", "pupil": {"radius_mm": 2.0}})"));
   const EyeModel& a = same.eyes.front().model();
-  const EyeModel& b = bundled("remote").eyes.front().model();
+  const EyeModel& b = remote.eyes.front().model();
   EXPECT_EQ(a.anterior_cornea.asphericity, b.anterior_cornea.asphericity);
   EXPECT_EQ(a.aqueous_index, b.aqueous_index);
   EXPECT_EQ(a.pupil_radius_mm, b.pupil_radius_mm);

@@ -64,9 +64,8 @@ int camera_index(const Scene& world, const CompareRequest& request) {
                                       " has no camera of that name");
 }
 
-// The world as the options make it: WORLD, with --world-eye's anatomy.
-Scene read_world(const CompareRequest& request) {
-  const Scene as_read = load_scene(request.world_file);
+// The world as the options make it: WORLD as read, with --world-eye's anatomy.
+Scene with_world_eye(const CompareRequest& request, const Scene& as_read) {
   return request.world_eye.empty() ? as_read : studies::with_eye_model(as_read, request.world_eye);
 }
 
@@ -105,7 +104,7 @@ int run_sweep(CompareRequest request) {
   std::vector<fs::path> inputs = {request.world_file};
   if (!request.world_eye.empty()) inputs.push_back(request.world_eye);
   refuse(check_output_folder(request.output_dir, {}, studies::sweep_outputs(), inputs));
-  const Scene world = read_world(request);
+  const Scene world = with_world_eye(request, load_scene(request.world_file));
   read_shared_options(request, world);
   const studies::CompareStudySettings& settings = request.settings;
   // Settings or ends the sweep refuses are named before any work.
@@ -135,9 +134,10 @@ int run_compare(CompareRequest request) {
     if (!input.empty()) inputs.push_back(input);  // an eye model by a preset's name names no file: no harm
   }
   refuse(check_output_folder(request.output_dir, {}, studies::compare_outputs(), inputs));
-  const Scene world = read_world(request);
+  const Scene as_read = load_scene(request.world_file);
+  const Scene world = with_world_eye(request, as_read);
   // The assumed version starts from ASSUMED, or from WORLD as read.
-  Scene assumed = load_scene(request.assumed_file.empty() ? request.world_file : request.assumed_file);
+  Scene assumed = request.assumed_file.empty() ? as_read : load_scene(request.assumed_file);
   if (!request.assumed_eye.empty()) assumed = studies::with_eye_model(assumed, request.assumed_eye);
   if (!request.assumed_cornea_text.empty()) {
     const auto c = numbers<2>("--assumed-cornea", request.assumed_cornea_text, "must be \"R,Q\", e.g. 7.8,0");

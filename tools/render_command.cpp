@@ -23,6 +23,7 @@ namespace {
 struct RenderRequest {
   studies::RenderSetRequest set;
   std::string mode = "fast";
+  std::string pixel_filter = "box";
   bool no_noise = false;
   bool quiet = false;  // no progress on stderr
   double max_gaze_deg = 30;
@@ -65,6 +66,7 @@ int run_render(RenderRequest request) {
   set.variation_range.max_gaze_turn_rad = request.max_gaze_deg * (std::numbers::pi / 180);
   set.options.mode = request.mode == "reference" ? renderer::RenderMode::reference : renderer::RenderMode::fast;
   set.options.noise = !request.no_noise;
+  set.options.pixel_filter.kind = *renderer::pixel_filter_kind(request.pixel_filter);  // checked by CLI11
 
   const studies::RenderPlan plan = studies::plan_render_set(set);
   refuse(check_output_folder(set.output_dir, {}, studies::render_set_outputs(plan), {set.scene_file}));
@@ -119,6 +121,23 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--photons", options.reference_photons_per_light,
                      "Reference mode: photons per light and eye for the light through the cornea")
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 30))
+      ->capture_default_str();
+  render->add_option("--pixel-filter", request->pixel_filter,
+                     "How a pixel weighs the image about its centre: box (its own square),\n"
+                     "gaussian or blackman-harris (for comparing with other renderers)")
+      ->check(CLI::IsMember({"box", "gaussian", "blackman-harris"}))
+      ->capture_default_str();
+  render->add_option("--pixel-filter-width", options.pixel_filter.width_px,
+                     "Width of the pixel filter's square of support, px (0: box 1, the others 3)")
+      ->check(CLI::Validator(
+          [](const std::string& text) -> std::string {
+            double w = -1;
+            if (!CLI::detail::lexical_cast(text, w) || !(w == 0 || (w >= 0.25 && w <= 16))) {
+              return "must be 0 (the filter's usual width) or in [0.25, 16], not " + text;
+            }
+            return {};
+          },
+          "0 or [0.25, 16]"))
       ->capture_default_str();
   render->add_option("--seed", options.seed, "Seed of jitter and sensor noise")->check(kSeed)->capture_default_str();
   render->add_flag("--no-noise", request->no_noise, "Leave out shot and read noise");

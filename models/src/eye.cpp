@@ -1,6 +1,7 @@
 #include "purkinje/models/eye.h"
 #include "purkinje/models/check.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -39,9 +40,39 @@ UnitVector3 optical_axis_for_visual_axis(const EyeModel& m, const UnitVector3& v
   return o;
 }
 
+// Radius of the eyeball's shell (the sclera's sphere and the limbal band
+// that joins it to the cornea's edge, as the renderer builds them) in the
+// plane `depth_mm` behind the anterior apex; 0 where the plane misses it.
+double shell_radius_mm(const EyeModel& m, double depth_mm) {
+  // Heights above the centre of rotation: the plane's, the limbus plane's,
+  // and the seam where the sphere meets the band (the band is a cylinder
+  // of the limbus's radius where the sphere is narrower than the limbus
+  // below the limbus plane, else an annulus in that plane).
+  const double h = m.rotation_center_depth_mm - depth_mm;
+  const double h_limbus = m.rotation_center_depth_mm - m.limbus_depth_mm();
+  const double R = m.sclera_radius_mm, r_limbus = m.limbus_radius_mm;
+  double h_seam = h_limbus;
+  if (R >= r_limbus && std::sqrt(R * R - r_limbus * r_limbus) < h_limbus) {
+    h_seam = std::sqrt(R * R - r_limbus * r_limbus);
+  }
+  if (h <= h_seam) return std::abs(h) < R ? std::sqrt(R * R - h * h) : 0.0;
+  return h <= h_limbus ? r_limbus : 0.0;
+}
+
 }  // namespace
 
 double EyeModel::limbus_depth_mm() const { return conicoid_depth(anterior_cornea, limbus_radius_mm); }
+
+double EyeModel::iris_outer_radius_mm() const {
+  if (posterior_cornea && iris_depth_mm > limbus_depth_mm()) {
+    // x^2 + y^2 = 2 R w - (1 + Q) w^2 on the posterior surface, w below its apex.
+    const Conicoid& back = posterior_cornea->surface;
+    const double w = iris_depth_mm - posterior_cornea->thickness_mm;
+    return std::sqrt(std::max(0.0, 2 * back.radius_mm * w - (1 + back.asphericity) * w * w));
+  }
+  return std::max(iris_radius_mm, shell_radius_mm(*this, iris_depth_mm));
+}
+
 
 UnitVector3 optical_axis_from_yaw_pitch(double yaw, double pitch) {
   return UnitVector3::normalize(

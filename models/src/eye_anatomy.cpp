@@ -151,6 +151,27 @@ std::optional<AnatomyProblem> anatomy_problem(const EyeModel& m) {
     return problem("iris.depth_mm", m.iris_depth_mm,
                    "must be < rotation_center_depth_mm (" + format_number(m.rotation_center_depth_mm) + ")");
   }
+  // A two-surface eye's posterior cornea runs on down to the iris plane
+  // (the chamber angle, EyeModel::iris_outer_radius_mm): a single-valued
+  // cap there too, within the limbus, so inside the eyeball's shell.
+  if (m.posterior_cornea && m.iris_depth_mm > limbus_depth) {
+    const Conicoid& back = m.posterior_cornea->surface;
+    const double w = m.iris_depth_mm - m.posterior_cornea->thickness_mm;
+    const double one_plus_q = 1.0 + back.asphericity;
+    if (one_plus_q > 0 && !(w < back.radius_mm / one_plus_q)) {
+      return problem("iris.depth_mm", m.iris_depth_mm,
+                     "must be < " + format_number(m.posterior_cornea->thickness_mm + back.radius_mm / one_plus_q) +
+                         " mm: the posterior cornea runs down to the iris plane and must still be a single-valued "
+                         "cap there");
+    }
+    const double angle_radius = m.iris_outer_radius_mm();
+    if (!(angle_radius <= limbus)) {
+      return problem("iris.depth_mm", m.iris_depth_mm,
+                     "the posterior cornea runs down to the iris plane and would meet it " +
+                         format_number(angle_radius) + " mm from the axis, beyond cornea.limbus_radius_mm (" +
+                         format_number(limbus) + ")");
+    }
+  }
   if (!(m.sclera_radius_mm < m.rotation_center_depth_mm)) {
     return problem("sclera_radius_mm", m.sclera_radius_mm,
                    "must be < rotation_center_depth_mm (" + format_number(m.rotation_center_depth_mm) +

@@ -32,10 +32,12 @@ def render(
     mode: str = "fast",
     samples_per_pixel: int = 1,
     edge_samples_per_pixel: int = 16,
+    pixel_filter: str = "box",
+    pixel_filter_width: float = 0.0,
     seed: int = 0,
     noise: bool = True,
     iris_cache_resolution: int = 0,
-    reference_photons_per_light: int = 1 << 22,
+    reference_photons_per_light: int = 1 << 18,
     per_light_glint_masks: bool = False,
     region: Optional[Tuple[int, int, int, int]] = None,
     threads: int = 0,
@@ -43,8 +45,11 @@ def render(
     """Renders one camera (index or name) of `scene` into numpy arrays, as
     `purkinje render` does with the same options (docs/rendering.md): the
     same seed gives the same pixels. `region` (x0, y0, x1, y1) traces only
-    those pixels. The GIL is released while rendering."""
-    return _purkinje._render(scene, camera, mode, samples_per_pixel, edge_samples_per_pixel, seed, noise,
+    those pixels. `pixel_filter` ("box", "gaussian", "blackman-harris") and
+    `pixel_filter_width` (px; 0: box 1, the others 3) are --pixel-filter and
+    --pixel-filter-width. The GIL is released while rendering."""
+    return _purkinje._render(scene, camera, mode, samples_per_pixel, edge_samples_per_pixel, pixel_filter,
+                             pixel_filter_width, seed, noise,
                              iris_cache_resolution, reference_photons_per_light, per_light_glint_masks, region,
                              threads)
 

@@ -78,7 +78,8 @@ ResultPool& pool() {
 }
 
 std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, const std::string& mode,
-                                 int samples_per_pixel, int edge_samples_per_pixel, std::uint64_t seed, bool noise,
+                                 int samples_per_pixel, int edge_samples_per_pixel, const std::string& pixel_filter,
+                                 double pixel_filter_width, std::uint64_t seed, bool noise,
                                  int iris_cache_resolution, std::int64_t reference_photons_per_light,
                                  bool per_light_glint_masks, const std::optional<std::array<int, 4>>& region,
                                  int threads) {
@@ -91,6 +92,12 @@ std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, c
   else throw std::invalid_argument("render: mode = \"" + mode + "\": must be \"fast\" or \"reference\"");
   o.samples_per_pixel = samples_per_pixel;
   o.edge_samples_per_pixel = edge_samples_per_pixel;
+  const std::optional<renderer::PixelFilterKind> filter = renderer::pixel_filter_kind(pixel_filter);
+  if (!filter) {
+    throw std::invalid_argument("render: pixel_filter = \"" + pixel_filter +
+                                "\": must be \"box\", \"gaussian\" or \"blackman-harris\"");
+  }
+  o.pixel_filter = {*filter, pixel_filter_width};  // the width is checked by the renderer
   o.seed = seed;
   o.noise = noise;
   o.iris_cache_resolution = iris_cache_resolution;
@@ -166,7 +173,7 @@ void bind_render(py::module_& m) {
       ;
 
   m.def("_render", &render, py::arg("scene"), py::arg("camera"), py::arg("mode"), py::arg("samples_per_pixel"),
-        py::arg("edge_samples_per_pixel"), py::arg("seed"), py::arg("noise"), py::arg("iris_cache_resolution"),
+        py::arg("edge_samples_per_pixel"), py::arg("pixel_filter"), py::arg("pixel_filter_width"), py::arg("seed"), py::arg("noise"), py::arg("iris_cache_resolution"),
         py::arg("reference_photons_per_light"), py::arg("per_light_glint_masks"), py::arg("region"),
         py::arg("threads"));
 

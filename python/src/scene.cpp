@@ -175,6 +175,9 @@ void bind_scene(py::module_& m) {
                              "the pupil centre in the iris plane, eye-frame (x, y), mm")
       .def_readonly("rotation_center_depth_mm", &EyeModel::rotation_center_depth_mm, "anterior apex to the centre of rotation, mm")
       .def_readonly("sclera_radius_mm", &EyeModel::sclera_radius_mm, "the sclera sphere's radius, mm")
+      .def_property_readonly("iris_outer_radius_mm", &EyeModel::iris_outer_radius_mm,
+                             "how far from the axis the iris reaches in the rendered eye: the chamber angle in a "
+                             "two-surface eye, the sclera in a one-surface eye, mm")
       .def_property_readonly("kappa_deg",
                              [](const EyeModel& e) {
                                constexpr double k = 180.0 / 3.14159265358979323846;

@@ -288,12 +288,6 @@ Sample solve_node(const Eye& eye, const EyeOptics& optics, const Point3& light_w
   return s;
 }
 
-// Radius of the iris annulus the renderer builds: out to the sclera.
-double iris_outer_radius(const EyeModel& m) {
-  const double dz = m.rotation_center_depth_mm - m.iris_depth_mm;
-  const double r2 = m.sclera_radius_mm * m.sclera_radius_mm - dz * dz;
-  return std::max(m.iris_radius_mm, r2 > 0 ? std::sqrt(r2) : 0.0);
-}
 
 // Catmull-Rom weights at fraction t between the middle two of four nodes.
 void cubic_weights(double t, double w[4]) {
@@ -310,6 +304,21 @@ void cubic_weights(double t, double w[4]) {
 constexpr int kFilledRings = 3;
 
 }  // namespace
+
+double refracted_irradiance_w_m2(const Eye& eye, const Point3& light, double radiant_intensity_w_sr,
+                                 const Point3& iris_plane_point, const IrisIrradianceCache::Visibility& visible) {
+  const EyeModel& m = eye.model();
+  const EyeOptics optics(m);
+  const Point3 p = eye.eye_from_world() * iris_plane_point;
+  if (!(p.x * p.x + p.y * p.y < optics.inside_radius * optics.inside_radius) || !(optics.inside_radius > 0)) {
+    return 0;
+  }
+  const Sample s = solve_node(eye, optics, light, (eye.eye_from_world() * light).from_origin(), radiant_intensity_w_sr,
+                              p.x, p.y);
+  if (!s.has_path || !(s.cap_margin > 0) || !(s.irradiance > 0)) return 0;
+  if (visible && !visible(light, eye.world_from_eye() * (Point3::origin() + s.path.ray.anterior))) return 0;
+  return s.irradiance;
+}
 
 IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_position,
                                          double radiant_intensity_w_sr, int resolution,
@@ -334,7 +343,7 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
   const EyeModel& m = eye.model();
   const EyeOptics optics(m);
   iris_plane_z_mm_ = optics.iris_z;
-  half_size_mm_ = iris_outer_radius(m);
+  half_size_mm_ = m.iris_outer_radius_mm();
   const int n = resolution;
   const std::size_t count = static_cast<std::size_t>(n) * n;
   light_mm_ = eye_from_world_ * light_position;
@@ -446,14 +455,19 @@ IrisIrradianceCache::IrisIrradianceCache(const Eye& eye, const Point3& light_pos
 
 double IrisIrradianceCache::irradiance_w_m2(const Point3& iris_plane_point) const {
   const Point3 p = eye_from_world_ * iris_plane_point;
-  const double scale = (resolution_ - 1) / (2.0 * half_size_mm_);
-  const double gx = (p.x + half_size_mm_) * scale, gy = (p.y + half_size_mm_) * scale;
-  const double last = resolution_ - 1;
-  if (!(gx >= 0 && gx <= last && gy >= 0 && gy <= last)) return 0;  // also rejects NaN
   // Light reaches only the part of the plane inside the cornea.
   if (!(p.x * p.x + p.y * p.y < inside_radius_mm_ * inside_radius_mm_) || !(inside_radius_mm_ > 0)) {
     return 0;
   }
+  return continued_irradiance_w_m2(iris_plane_point);
+}
+
+double IrisIrradianceCache::continued_irradiance_w_m2(const Point3& iris_plane_point) const {
+  const Point3 p = eye_from_world_ * iris_plane_point;
+  const double scale = (resolution_ - 1) / (2.0 * half_size_mm_);
+  const double gx = (p.x + half_size_mm_) * scale, gy = (p.y + half_size_mm_) * scale;
+  const double last = resolution_ - 1;
+  if (!(gx >= 0 && gx <= last && gy >= 0 && gy <= last)) return 0;  // also rejects NaN
   const int i = std::min(static_cast<int>(gx), resolution_ - 2);
   const int j = std::min(static_cast<int>(gy), resolution_ - 2);
   double wx[4], wy[4];

@@ -1,6 +1,6 @@
 // The brute-force reference integrator, against which the fast mode is
-// measured. It shares nothing with the fast mode's shortcuts: no solver
-// paths, no irradiance caches, no point lights.
+// measured. It shares none of the fast mode's shortcuts: no irradiance
+// caches or interpolation, no point lights.
 //
 // - Camera paths: the camera's specular chain through the cornea is split
 //   into its Fresnel-weighted reflected and refracted branches, as in the
@@ -12,14 +12,21 @@
 //   sclera, and light that the cornea's inner side reflects back onto the
 //   iris), up to kMaxDiffuseBounces, with Russian roulette after the first.
 // - Light reaching the iris and pupil through the cornea (a caustic that
-//   camera paths cannot find: at 600 mm an LED subtends about 1e-6 sr)
-//   comes from photons: from each LED's disc, in directions filling the
-//   cone toward the cornea, through every corneal interface with
-//   Fresnel-weighted splitting (reflections inside the cornea included),
-//   binned where they land on the iris plane. Photon directions come from
-//   a randomly shifted low-discrepancy sequence (R4), so the bins' noise is
-//   well below that of independent photons. Each bin's irradiance is
-//   flux / area; lookups interpolate bilinearly between bin centres.
+//   camera paths cannot find: at 600 mm an LED subtends about 1e-6 sr) in
+//   two parts. Along the path that refracts straight through: at each
+//   iris or pupil hit, from a random point of each LED's disc, the path
+//   solved exactly there and its irradiance I T dOmega/dA
+//   (refracted_irradiance_w_m2; manifold next-event estimation, as Cycles'
+//   MNEE does): unbiased, with no edge smeared. Along paths that reflect
+//   inside the cornea on the way (about 0.1% of the light): photons from
+//   each LED's disc, in directions filling the cone toward the cornea,
+//   through every corneal interface with Fresnel-weighted splitting,
+//   binned where they land on the iris plane after a reflection. Photon
+//   directions come from a randomly shifted low-discrepancy sequence (R4);
+//   each bin's irradiance is flux / area; lookups interpolate bilinearly
+//   between bin centres. (All the light came from photons before: their
+//   bins smeared the lit region's edges, which near the limbus left the
+//   reference up to 10% off its own converged value at 2^20 photons.)
 // Every random number is a pure function of (seed, purpose, index), and
 // photon flux is summed in integers, so results do not depend on threads.
 
@@ -91,13 +98,6 @@ class R4Sequence {
   std::uint64_t step_[4] = {}, shift_[4] = {};
 };
 
-// Radius of the iris plane's disc inside the eye's shell (the iris reaches
-// out to the sclera; see scene_geometry.h).
-double outer_radius(const EyeModel& m) {
-  const double dz = m.rotation_center_depth_mm - m.iris_depth_mm;
-  const double r2 = m.sclera_radius_mm * m.sclera_radius_mm - dz * dz;
-  return std::max(m.iris_radius_mm, r2 > 0 ? std::sqrt(r2) : 0.0);
-}
 
 // Irradiance on one eye's iris plane from one light, from traced photons.
 class IrisPhotonMap {
@@ -107,7 +107,7 @@ class IrisPhotonMap {
       : scene_(scene), eye_(scene.eyes[eye_index]), tracer_(tracer) {
     const EyeModel& m = eye_.model();
     eye_from_world_ = eye_.eye_from_world();
-    half_ = outer_radius(m) + 0.1;
+    half_ = m.iris_outer_radius_mm() + 0.1;
     side_ = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(photons) / kPhotonsPerBin)), 8, 512);
     bin_ = 2 * half_ / side_;
 
@@ -152,7 +152,7 @@ class IrisPhotonMap {
           const Vector3 dir = axis * cos_t + a * (sin_t * std::cos(phi)) + b * (sin_t * std::sin(phi));
           // Flux I * Omega / N, Omega = 2 pi (1 - cos_cone): relative to
           // the cone from the disc's centre.
-          trace_photon({origin, UnitVector3::normalize(dir)}, (1 - cos_cone) / cone0, 0, bins);
+          trace_photon({origin, UnitVector3::normalize(dir)}, (1 - cos_cone) / cone0, 0, false, bins);
         }
       }
     });
@@ -170,7 +170,7 @@ class IrisPhotonMap {
     // darken the iris's edge.
     irradiance_.assign(total.size(), 0.0);
     inside_.assign(total.size(), false);
-    const double rim = outer_radius(m);
+    const double rim = m.iris_outer_radius_mm();
     constexpr int kSub = 8;
     for (int y = 0; y < side_; ++y) {
       for (int x = 0; x < side_; ++x) {
@@ -214,11 +214,13 @@ class IrisPhotonMap {
  private:
   // Follows a photon of relative weight `weight` through the cornea,
   // splitting at every interface; deposits where it meets the iris plane.
-  void trace_photon(const Ray& ray, double weight, int depth, std::vector<std::uint64_t>& bins) const {
+  void trace_photon(const Ray& ray, double weight, int depth, bool reflected,
+                    std::vector<std::uint64_t>& bins) const {
     const Hit hit = tracer_.intersect(ray);
     switch (scattering_of(hit.surface)) {
       case Scattering::iris:
       case Scattering::pupil: {
+        if (!reflected) return;  // refracted_irradiance_w_m2's light, solved per sample
         const Point3 p = eye_from_world_ * hit.point;
         const int x = static_cast<int>(std::floor((p.x + half_) / bin_));
         const int y = static_cast<int>(std::floor((p.y + half_) / bin_));
@@ -232,12 +234,12 @@ class IrisPhotonMap {
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const double w_t = weight * (1 - c.reflectance), w_r = weight * c.reflectance;
         if (c.transmitted && w_t > kMinBranchWeight) {
-          trace_photon({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, w_t, depth + 1, bins);
+          trace_photon({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, w_t, depth + 1, reflected, bins);
         }
         // Light reflected off the front of the cornea leaves the eye.
         const bool outside = hit.surface == Surface::cornea_anterior && dot(ray.direction.vector(), hit.normal.vector()) < 0;
         if (!outside && c.reflected && w_r > kMinBranchWeight) {
-          trace_photon({hit.point + c.facing * kRayOffsetMm, *c.reflected}, w_r, depth + 1, bins);
+          trace_photon({hit.point + c.facing * kRayOffsetMm, *c.reflected}, w_r, depth + 1, true, bins);
         }
         return;
       }
@@ -299,16 +301,19 @@ class ReferenceIntegrator final : public PathIntegrator {
       case Scattering::iris: {
         const double albedo = diffuse_albedo(scene_, hit);
         for (std::size_t k = 0; k < lights_.size(); ++k) {
-          out.add(weight * albedo * kInvPi * iris_[hit.eye][k].irradiance_w_m2(hit.point), lights_[k]);
+          out.add(weight * albedo * kInvPi * iris_irradiance(hit, k, rng), lights_[k]);
         }
         indirect_light(hit, bounces, weight, albedo, rng, out);
         return;
       }
-      case Scattering::pupil:
+      case Scattering::pupil: {
         // Only the fundus's retro-reflection comes back out of the pupil.
+        std::vector<double> e(lights_.size());
+        for (std::size_t k = 0; k < lights_.size(); ++k) e[k] = iris_irradiance(hit, k, rng);
         add_bright_pupil(scene_.eyes[hit.eye], lights_, camera_.center(), weight,
-                         [&](std::size_t k) { return iris_[hit.eye][k].irradiance_w_m2(hit.point); }, out);
+                         [&](std::size_t k) { return e[k]; }, out);
         return;
+      }
       case Scattering::interface: {
         if (depth >= kMaxSpecularDepth) return;
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
@@ -332,6 +337,22 @@ class ReferenceIntegrator final : public PathIntegrator {
         return;
       }
     }
+  }
+
+  // Light `k` on the iris plane at `hit`: along the path refracted through
+  // the cornea from one point of the LED's disc (facing the eye), solved
+  // there (manifold next-event estimation), plus the photons that reached
+  // it after reflecting inside the cornea.
+  double iris_irradiance(const Hit& hit, std::size_t k, PathSampler& rng) const {
+    const Light& l = lights_[k];
+    const Eye& eye = scene_.eyes[hit.eye];
+    const double u = rng.next(), v = rng.next();
+    const Point3 q = point_on_disc(l.position, eye.cornea_center() - l.position, l.emitter_radius_mm, u, v);
+    const auto visible = [this](const Point3& light, const Point3& cornea) {
+      return !tracer_.occluded_except_cornea(light, cornea);
+    };
+    return refracted_irradiance_w_m2(eye, q, l.intensity_w_sr, hit.point, visible) +
+           iris_[hit.eye][k].irradiance_w_m2(hit.point);
   }
 
   // Next-event estimation: one point of each LED's disc (facing the lit

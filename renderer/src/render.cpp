@@ -23,7 +23,9 @@
 
 #include "film.h"
 #include "integrator.h"
+#include "pixel_filter.h"
 #include "sampler.h"
+#include "purkinje/models/check.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/sensor_model.h"
 
@@ -35,6 +37,27 @@ const char* to_string(RenderMode mode) {
     case RenderMode::reference: return "reference";
   }
   return "unknown";
+}
+
+const char* to_string(PixelFilterKind kind) {
+  switch (kind) {
+    case PixelFilterKind::box: return "box";
+    case PixelFilterKind::gaussian: return "gaussian";
+    case PixelFilterKind::blackman_harris: return "blackman-harris";
+  }
+  return "unknown";
+}
+
+std::optional<PixelFilterKind> pixel_filter_kind(const std::string& name) {
+  for (const PixelFilterKind k : {PixelFilterKind::box, PixelFilterKind::gaussian, PixelFilterKind::blackman_harris}) {
+    if (name == to_string(k)) return k;
+  }
+  return std::nullopt;
+}
+
+double pixel_filter_width_px(const PixelFilter& filter) {
+  if (filter.width_px != 0) return filter.width_px;
+  return filter.kind == PixelFilterKind::box ? 1.0 : 3.0;
 }
 
 int edge_samples_per_pixel(const RenderOptions& options) {
@@ -76,6 +99,10 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
                                   std::to_string(k.height) + " image");
     }
   }
+  if (const double w = options.pixel_filter.width_px; !(w == 0 || (w >= 0.25 && w <= 16))) {
+    throw std::invalid_argument("render: pixel_filter width_px = " + check::format_number(w) +
+                                ": must be 0 (the filter's usual width) or in [0.25, 16]");
+  }
   if (options.threads < 0) {
     throw std::invalid_argument("render: threads = " + std::to_string(options.threads) +
                                 ": must be >= 0 (0: all)");
@@ -102,7 +129,8 @@ class CameraPass {
              const RenderOptions& options, Film& film)
       : camera_(camera), tracer_(tracer), integrator_(integrator), options_(options), film_(film),
         width_(camera.intrinsics().width), edge_spp_(edge_samples_per_pixel(options)),
-        center_(camera.center()), axis_(camera.world_from_camera().rotation() * UnitVector3::unit_z()) {}
+        center_(camera.center()), axis_(camera.world_from_camera().rotation() * UnitVector3::unit_z()),
+        filter_(options.pixel_filter) {}
 
   // One row of the first pass: lone centre rays in packets along the row,
   // or `spp` samples a pixel.
@@ -204,7 +232,7 @@ class CameraPass {
       const int count = std::min(kPacket, samples - first);
       for (int i = 0; i < count; ++i) {
         const auto [ou, ov] = r2_point(first + i, shift_u, shift_v);
-        positions[i] = {x - 0.5 + ou, y - 0.5 + ov};
+        positions[i] = {x + filter_.offset(ou), y + filter_.offset(ov)};
         rays[i] = camera_ray(positions[i]);
       }
       tracer_.intersect(std::span<const Ray>(rays.data(), count), std::span<Hit>(hits.data(), count));
@@ -229,6 +257,7 @@ class CameraPass {
   const int width_, edge_spp_;
   const Point3 center_;
   const UnitVector3 axis_;
+  const PixelFilterSampler filter_;
 };
 
 // Optics: one point spread per image, at the depth of the nearest eye in

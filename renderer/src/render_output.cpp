@@ -68,6 +68,8 @@ json settings_document(const Camera& camera, const RenderOptions& options) {
   settings["samples_per_pixel"] = options.samples_per_pixel;
   // What adaptive sampling gave the pixels it refined (no more than the rest: off).
   settings["edge_samples_per_pixel"] = edge_samples_per_pixel(options);
+  settings["pixel_filter"] = {{"kind", to_string(options.pixel_filter.kind)},
+                              {"width_px", pixel_filter_width_px(options.pixel_filter)}};
   settings["seed"] = options.seed;
   settings["iris_cache_resolution"] = options.iris_cache_resolution;
   if (options.mode == RenderMode::reference) settings["photons_per_light"] = options.reference_photons_per_light;

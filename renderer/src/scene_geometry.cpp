@@ -88,8 +88,10 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
       surfaces::ConicoidCap{R, 1.0 + m.anterior_cornea.asphericity, R, d_L});
 
   if (m.posterior_cornea) {
+    // Down to the limbus plane, or on to the iris plane behind it (the
+    // chamber angle: EyeModel::iris_outer_radius_mm).
     const PosteriorCornea& p = *m.posterior_cornea;
-    const double depth = d_L - p.thickness_mm;
+    const double depth = std::max(d_L, m.iris_depth_mm) - p.thickness_mm;
     add(list, Surface::cornea_posterior, index, world_from_eye,
         surfaces::ConicoidCap{p.surface.radius_mm, 1.0 + p.surface.asphericity,
                               R - p.thickness_mm, depth});
@@ -117,18 +119,15 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
   add(list, Surface::sclera, index, world_from_eye,
       surfaces::SphereBelowPlane{{0, 0, z_c}, R_s, z_seam});
 
-  // Iris and pupil, the iris reaching out to the shell.
+  // Iris and pupil.
   const double z_I = R - m.iris_depth_mm;
-  double wall = 0;
-  if (z_I <= z_seam) {
-    if (std::abs(z_I - z_c) < R_s) wall = std::sqrt(R_s * R_s - (z_I - z_c) * (z_I - z_c));
-  } else if (z_I <= z_L) {
-    wall = r_L;  // beside the cylindrical band
-  }
   const double r_p = m.pupil_radius_mm;
   surfaces::PlaneRegion iris;
   iris.z_mm = z_I;
-  iris.outer_radius_mm = std::max(m.iris_radius_mm, wall);
+  // Out to the sclera, or in a two-surface eye to the chamber angle: past
+  // it, camera rays and light that crossed only the anterior cornea go on
+  // into the eye's dark inside.
+  iris.outer_radius_mm = m.iris_outer_radius_mm();
   iris.hole_x_mm = m.pupil_decentration_x_mm;
   iris.hole_y_mm = m.pupil_decentration_y_mm;
   iris.hole_radius_mm = r_p;

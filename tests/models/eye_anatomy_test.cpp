@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "purkinje/models/check.h"
 #include "purkinje/models/eye.h"
 #include "purkinje/models/scene_file.h"
 
@@ -98,6 +99,73 @@ TEST(EyeAnatomy, SizesThatMakeNoEyeAreNamedByTheirKeys) {
   EXPECT_EQ(anatomy_problem(wide)->key, "cornea.limbus_radius_mm");
   EXPECT_EQ(anatomy_problem(wide)->rule,
             "must be < radius_mm / sqrt(1 + asphericity) = 7.8 mm, where the cornea stops being a single-valued cap");
+}
+
+// Where the iris ends: in a two-surface eye at the chamber angle, where the
+// posterior cornea (which runs down to the iris plane) meets it; in a
+// one-surface eye at the sclera's sphere. By hand, for the presets' shared
+// anatomy (iris plane 3.6 mm deep, posterior apex 0.55 mm deep, R 6.5 mm;
+// sclera R 12 mm about a centre 13.5 mm deep).
+TEST(EyeAnatomy, TheIrisEndsAtTheChamberAngleOrAtTheSclera) {
+  const double w = 3.6 - 0.55;
+  EXPECT_NEAR(navarro_eye().iris_outer_radius_mm(), std::sqrt(6.5 * 6.5 - (6.5 - w) * (6.5 - w)), 1e-12);
+  EXPECT_NEAR(le_grand_eye().iris_outer_radius_mm(), std::sqrt(6.5 * 6.5 - (6.5 - w) * (6.5 - w)), 1e-12);
+  EXPECT_NEAR(keratometric_eye().iris_outer_radius_mm(), std::sqrt(12.0 * 12.0 - 9.9 * 9.9), 1e-12);
+  // An aspheric posterior surface: x^2 + y^2 = 2 R w - (1 + Q) w^2.
+  EyeModel prolate = navarro_eye();
+  prolate.posterior_cornea->surface.asphericity = -0.4;
+  EXPECT_NEAR(prolate.iris_outer_radius_mm(), std::sqrt(2 * 6.5 * w - 0.6 * w * w), 1e-12);
+  // A wide sclera meets the limbus plane in an annulus; a narrow one joins it
+  // by a band of the limbus's radius, which the iris meets when its plane
+  // lies beside the band: sphere radius 6 mm about a centre 8.5 mm deep
+  // reaches 5.9 mm from the axis sqrt(36 - 5.9^2) = 1.091 mm above the
+  // centre, 7.409 mm deep, behind an iris 3.6 mm deep.
+  EyeModel small = keratometric_eye();
+  small.sclera_radius_mm = 6.0;
+  small.rotation_center_depth_mm = 8.5;
+  small.iris_radius_mm = 5.0;
+  ASSERT_FALSE(anatomy_problem(small)) << anatomy_problem(small)->rule;
+  EXPECT_EQ(small.iris_outer_radius_mm(), 5.9);
+  // An iris in front of the limbus plane in a two-surface eye: the
+  // posterior cornea stops at the limbus plane, the iris is its own size.
+  EyeModel shallow = navarro_eye();
+  shallow.iris_depth_mm = 2.4;  // the limbus is 2.571 mm deep
+  shallow.pupil_radius_mm = 1.0;
+  EXPECT_EQ(shallow.iris_outer_radius_mm(), 5.5);
+}
+
+// The posterior cornea, run on down to the iris plane, must stay within the
+// limbus: at iris depth 4.5 mm it is sqrt(2 6.5 3.95 - 3.95^2) = 5.979 mm
+// from the axis, beyond the limbus's 5.9 mm.
+TEST(EyeAnatomy, APosteriorCorneaReachingTheIrisPlaneOutsideTheLimbusIsRefused) {
+  EyeModel m = navarro_eye();
+  m.iris_depth_mm = 4.5;
+  const std::optional<AnatomyProblem> problem = anatomy_problem(m);
+  ASSERT_TRUE(problem);
+  EXPECT_EQ(problem->key, "iris.depth_mm");
+  EXPECT_EQ(problem->value, "4.5");
+  EXPECT_NE(problem->rule.find("beyond cornea.limbus_radius_mm (5.9)"), std::string::npos) << problem->rule;
+  const double r = std::sqrt(2 * 6.5 * 3.95 - 3.95 * 3.95);
+  EXPECT_NE(problem->rule.find(check::format_number(r) + " mm from the axis"), std::string::npos) << problem->rule;
+  EXPECT_EQ(reader_message(R"({ "model": "navarro", "iris": { "depth_mm": 4.5 } })"),
+            "eye.json: eyes[0].iris.depth_mm = 4.5: " + problem->rule);
+  m.iris_depth_mm = 4.4;  // 5.94 mm: still beyond
+  EXPECT_TRUE(anatomy_problem(m));
+  m.iris_depth_mm = 4.3;  // sqrt(2 6.5 3.75 - 3.75^2) = 5.897 mm: within
+  EXPECT_FALSE(anatomy_problem(m));
+  // Past the posterior surface's equator it is no single-valued cap: an
+  // oblate ellipsoid R 3 mm, Q 0.5 turns at w = R / (1 + Q) = 2 mm below
+  // its apex, and the iris plane lies 3.4 mm below it.
+  EyeModel deep = navarro_eye();
+  deep.posterior_cornea->surface = {3.0, 0.5};
+  deep.posterior_cornea->thickness_mm = 0.2;
+  deep.limbus_radius_mm = 2.4;
+  deep.iris_radius_mm = 2.4;
+  deep.pupil_radius_mm = 0.5;
+  const std::optional<AnatomyProblem> turned = anatomy_problem(deep);
+  ASSERT_TRUE(turned);
+  EXPECT_EQ(turned->key, "iris.depth_mm") << turned->rule;
+  EXPECT_NE(turned->rule.find("single-valued cap there"), std::string::npos) << turned->rule;
 }
 
 }  // namespace

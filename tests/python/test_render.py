@@ -28,6 +28,21 @@ def test_files_written_from_python_are_the_command_lines_byte_for_byte(name, tmp
         assert (tmp_path / "py" / cli_file.name).read_bytes() == cli_file.read_bytes(), kind
 
 
+def test_a_pixel_filter_gives_the_command_lines_files(tmp_path):
+    file = SOURCE_DIR / "assets/scenes/remote.json"
+    cli("render", file, "-o", tmp_path / "cli", "--samples", "3", "--pixel-filter", "blackman-harris",
+        "--pixel-filter-width", "2.5")
+    result = purkinje.render(purkinje.load_scene(file), samples_per_pixel=3, pixel_filter="blackman-harris",
+                             pixel_filter_width=2.5)
+    paths = result.write(tmp_path / "py")
+    for path in paths.values():
+        assert path.read_bytes() == (tmp_path / "cli" / path.name).read_bytes(), path.name
+    assert json.loads(paths["labels"].read_text())["render"]["pixel_filter"] == {
+        "kind": "blackman-harris", "width_px": 2.5}
+    box = purkinje.render(purkinje.load_scene(file), samples_per_pixel=3)
+    assert not np.array_equal(box.radiance, result.radiance)
+
+
 @pytest.mark.parametrize("name", ["remote", "headset"])
 def test_arrays_equal_the_command_lines_png_and_exr(name, tmp_path):
     file = SOURCE_DIR / f"assets/scenes/{name}.json"
@@ -107,6 +122,10 @@ def test_bad_options_raise_value_errors_naming_them(remote_file):
         purkinje.render(scene, 1.5)
     with pytest.raises(ValueError, match="threads = 2000: must be from 0 .all. to 1024"):
         purkinje.render(scene, threads=2000)
+    with pytest.raises(ValueError, match='pixel_filter = "mitchell": must be "box", "gaussian" or "blackman-harris"'):
+        purkinje.render(scene, pixel_filter="mitchell")
+    with pytest.raises(ValueError, match="pixel_filter width_px = 20: must be 0"):
+        purkinje.render(scene, pixel_filter_width=20)
 
 
 def test_files_are_refused_as_the_command_line_refuses_them(remote_file, tmp_path):

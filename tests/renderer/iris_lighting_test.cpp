@@ -228,6 +228,8 @@ void expect_matches_monte_carlo(const EyeModel& model, double angle, double dist
   const IrisIrradianceCache cache(eye, light_at(eye, angle, distance), intensity, 33);
   const std::vector<BinEstimate> mc = monte_carlo(model, eye_light(angle, distance), intensity, bins,
                                                   360, 8);
+  const Point3 light = light_at(eye, angle, distance);
+  const double z = iris_plane_z(model);
   for (std::size_t k = 0; k < bins.size(); ++k) {
     const double cached = cache_mean(cache, eye, bins[k].cx, bins[k].cy, bins[k].half);
     ASSERT_GT(mc[k].mean_w_m2, 0) << "bin " << k;
@@ -236,6 +238,19 @@ void expect_matches_monte_carlo(const EyeModel& model, double angle, double dist
         << model.name << " light " << angle / kDeg << " deg at " << distance << " mm, bin (" << bins[k].cx
         << ", " << bins[k].cy << "): Monte Carlo " << mc[k].mean_w_m2 << " +- " << mc[k].sigma_w_m2
         << " W/m^2, deviation " << (cached - mc[k].mean_w_m2) / mc[k].mean_w_m2 * 100 << " %";
+    // The reference mode's per-point solve (no cache), over the same bin.
+    constexpr int kPoints = 12;
+    double solved = 0;
+    for (int j = 0; j < kPoints; ++j) {
+      for (int i = 0; i < kPoints; ++i) {
+        const double x = bins[k].cx - bins[k].half + (i + 0.5) * 2 * bins[k].half / kPoints;
+        const double y = bins[k].cy - bins[k].half + (j + 0.5) * 2 * bins[k].half / kPoints;
+        solved += refracted_irradiance_w_m2(eye, light, intensity, world(eye, x, y, z)) / (kPoints * kPoints);
+      }
+    }
+    EXPECT_NEAR(solved, mc[k].mean_w_m2, tolerance)
+        << model.name << " light " << angle / kDeg << " deg at " << distance << " mm, bin (" << bins[k].cx
+        << ", " << bins[k].cy << "): solved per point " << solved << ", Monte Carlo " << mc[k].mean_w_m2;
   }
 }
 
@@ -257,6 +272,9 @@ TEST(IrisIrradianceCache, MatchesParaxialClosedFormOnTheAxis) {
     const double t0 = 1 - ((n - 1) / (n + 1)) * ((n - 1) / (n + 1));
     const double expected = intensity / (d * d) * t0 * (v / (v - t)) * (v / (v - t)) * 1e6;
     EXPECT_NEAR(cache.irradiance_w_m2(world(eye, 0, 0, iris_plane_z(m))), expected, 1e-3 * expected)
+        << "d = " << d;
+    EXPECT_NEAR(refracted_irradiance_w_m2(eye, light, intensity, world(eye, 0, 0, iris_plane_z(m))), expected,
+                1e-3 * expected)
         << "d = " << d;
   }
 }

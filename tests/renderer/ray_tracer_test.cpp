@@ -485,6 +485,53 @@ TEST(RayTracer, PosteriorCorneaIsHitFromInsideTheEye) {
   }
 }
 
+// The posterior cornea runs down to the iris plane, and the iris ends where
+// it meets it (the chamber angle, sqrt(6.5^2 - 3.45^2) = 5.5089 mm from the
+// axis for Navarro's eye): a ray along the axis's direction 5 mm from it
+// crosses the anterior cornea, then the posterior one 0.55 + 6.5 -
+// sqrt(6.5^2 - 5^2) = 2.8967 mm deep (behind the limbus plane, 2.571 mm:
+// it used to stop there, and such rays reached the iris having crossed
+// only the anterior surface), then the iris; one 5.7 mm from it crosses
+// only the anterior cornea and goes on past the iris's edge into the dark
+// inside of the sclera.
+TEST(RayTracer, ThePosteriorCorneaReachesTheIrisAtTheChamberAngle) {
+  const EyeModel m = navarro_eye();
+  const Eye eye = facing_camera(m);
+  const RayTracer tracer(scene_of({eye}));
+  const auto hits_along = [&](double x) {
+    std::vector<Hit> hits;
+    Ray ray = ray_along(eye_to_world_facing({x, 0, 20}), {0, 0, 1});
+    for (int i = 0; i < 4; ++i) {
+      const Hit hit = tracer.intersect(ray);
+      hits.push_back(hit);
+      if (hit.surface == Surface::none || hit.surface == Surface::iris || hit.surface == Surface::sclera) break;
+      ray.t_min = hit.t + 1e-7;
+    }
+    return hits;
+  };
+  const std::vector<Hit> inner = hits_along(5.0);
+  ASSERT_EQ(inner.size(), 3u);
+  EXPECT_EQ(inner[0].surface, Surface::cornea_anterior);
+  ASSERT_EQ(inner[1].surface, Surface::cornea_posterior);
+  expect_point_near(inner[1].point, eye_to_world_facing({5.0, 0, 7.72 - (0.55 + 6.5 - std::sqrt(6.5 * 6.5 - 25.0))}), 1e-12);
+  EXPECT_EQ(inner[2].surface, Surface::iris);
+  expect_point_near(inner[2].point, eye_to_world_facing({5.0, 0, 7.72 - 3.6}), 1e-12);
+
+  const double angle = std::sqrt(6.5 * 6.5 - 3.45 * 3.45);
+  EXPECT_NEAR(m.iris_outer_radius_mm(), angle, 1e-12);
+  const std::vector<Hit> outer = hits_along(5.7);
+  ASSERT_EQ(outer.size(), 2u);
+  EXPECT_EQ(outer[0].surface, Surface::cornea_anterior);
+  EXPECT_EQ(outer[1].surface, Surface::sclera);
+  EXPECT_FALSE(outer[1].front_face);
+  // Just inside and outside the angle, from within the chamber.
+  const Point3 chamber = eye_to_world_facing({0, 0, 7.72 - 3.0});
+  EXPECT_EQ(tracer.intersect(ray_to(chamber, eye_to_world_facing({angle - 1e-3, 0, 7.72 - 3.6}))).surface,
+            Surface::iris);
+  EXPECT_EQ(tracer.intersect(ray_to(chamber, eye_to_world_facing({angle + 1e-3, 0, 7.72 - 3.6}))).surface,
+            Surface::cornea_posterior);
+}
+
 // ---------------------------------------------------------------------------
 // Sealing: from outside, nothing inside the eye is reached without crossing
 // the shell (cornea, limbal band, sclera), and no ray leaks out of it.

@@ -56,6 +56,13 @@ struct EyeModel {
 
   // Depth (along the optical axis, from the anterior apex) of the limbus plane.
   double limbus_depth_mm() const;
+  // How far from the axis the iris reaches in the traced eye. In a
+  // two-surface eye whose iris lies behind the limbus plane, the posterior
+  // cornea runs down to the iris plane (the chamber angle, at the iris
+  // root): the iris ends where it meets it, and what lies beyond, inside the
+  // corneoscleral shell, is opaque tissue. Otherwise the iris reaches out
+  // to the sclera, so that no gap opens between them.
+  double iris_outer_radius_mm() const;
 };
 
 // Presets; values and sources in docs/eye-models.md.

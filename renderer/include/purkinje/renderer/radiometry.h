@@ -57,6 +57,14 @@ class IrisIrradianceCache {
 
   // At a world point on (or within rounding of) the iris plane; 0 outside the grid.
   double irradiance_w_m2(const Point3& iris_plane_point) const;
+  // The same without the last step, the dark beyond the rim of the disc
+  // inside the cornea (inside_radius_mm): there the paths' continuation, so
+  // that a table built from these values interpolates no rim and can cut
+  // at it exactly itself.
+  double continued_irradiance_w_m2(const Point3& iris_plane_point) const;
+  // Radius of the iris plane's disc inside every corneal surface (eye
+  // frame, about the optical axis); <= 0: none.
+  double inside_radius_mm() const { return inside_radius_mm_; }
   // Half the side of the grid's square, in mm (eye frame, centred on the optical axis).
   double half_size_mm() const { return half_size_mm_; }
   int resolution() const { return resolution_; }
@@ -101,6 +109,15 @@ class IrisIrradianceCache {
   double anterior_inner_index_ = 1;
   std::vector<GridNode> nodes_;  // row-major, y rows of x columns
 };
+
+// The same irradiance at one iris-plane point, solved there (no cache):
+// along the one path that refracts through the cornea without reflecting
+// inside it, 0 where none reaches the point (beyond the limbus's shadow,
+// the light's horizon or the chamber angle) or `visible` says the light is
+// hidden from the path's anterior crossing. A few microseconds.
+double refracted_irradiance_w_m2(const Eye& eye, const Point3& light, double radiant_intensity_w_sr,
+                                 const Point3& iris_plane_point,
+                                 const IrisIrradianceCache::Visibility& visible = {});
 
 // Procedural iris albedo at a point of the iris plane given in the eye
 // frame (mm), for the eye's appearance: radial fibres, crypts, a darker

@@ -40,6 +40,24 @@ struct PixelRegion {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
 
+// How a pixel weighs the image plane about its centre: its camera rays go
+// through positions drawn from the filter (filter importance sampling,
+// separable in x and y), each weighing alike. Box, one pixel wide, is the
+// pixel's own square; the others are what renderers such as Cycles use,
+// for comparing images with theirs (docs/rendering.md).
+enum class PixelFilterKind { box, gaussian, blackman_harris };
+const char* to_string(PixelFilterKind kind);  // "box", "gaussian", "blackman-harris"
+std::optional<PixelFilterKind> pixel_filter_kind(const std::string& name);
+
+struct PixelFilter {
+  PixelFilterKind kind = PixelFilterKind::box;
+  // Width of its square of support, in pixels: 0 for the kind's usual
+  // (box 1; Gaussian 3, its sigma a sixth of the width; Blackman-Harris 3).
+  double width_px = 0;
+};
+// The width a filter has (its own, or its kind's usual one).
+double pixel_filter_width_px(const PixelFilter& filter);
+
 struct RenderOptions {
   RenderMode mode = RenderMode::fast;
   // Camera rays per pixel, low-discrepancy with a seeded shift; a single
@@ -51,14 +69,16 @@ struct RenderOptions {
   // fewer (docs/rendering.md). 0: off. The reference mode samples every
   // pixel alike: choosing pixels by their noisy first samples would bias it.
   int edge_samples_per_pixel = 16;
+  PixelFilter pixel_filter;       // box, one pixel wide
   std::uint64_t seed = 0;         // sub-pixel jitter, emitter sampling and sensor noise
   bool noise = true;              // false: no shot or read noise whatever the sensor says
   // Nodes per side of each iris irradiance cache (fast mode). 0: from the
   // iris's size in the image, a node every 2 px or so (odd, 9 to 33).
   int iris_cache_resolution = 0;
-  // Reference mode: photons traced from each light into each eye, binned on
-  // the iris plane; the binning's noise falls as 1/sqrt of this.
-  std::int64_t reference_photons_per_light = std::int64_t{1} << 22;
+  // Reference mode: photons traced from each light into each eye for the
+  // light that reaches the iris after reflecting inside the cornea (about
+  // 1e-5 of its light), binned on the iris plane.
+  std::int64_t reference_photons_per_light = std::int64_t{1} << 18;
   bool per_light_glint_masks = false;
   // Trace only these pixels (the rest stay 0 in radiance and AOVs); glints
   // and the sensor still cover the whole image. Absent: every pixel.

@@ -18,7 +18,7 @@
 //   solved exactly there and its irradiance I T dOmega/dA
 //   (refracted_irradiance_w_m2; manifold next-event estimation, as Cycles'
 //   MNEE does): unbiased, with no edge smeared. Along paths that reflect
-//   inside the cornea on the way (about 0.1% of the light): photons from
+//   inside the cornea on the way (about 1e-5 of the light): photons from
 //   each LED's disc, in directions filling the cone toward the cornea,
 //   through every corneal interface with Fresnel-weighted splitting,
 //   binned where they land on the iris plane after a reflection. Photon

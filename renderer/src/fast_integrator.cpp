@@ -174,23 +174,21 @@ class FastIntegrator final : public PathIntegrator {
         const Point3 local = scene_.eyes[hit.eye].eye_from_world() * hit.point;
         const double scaled_albedo = weight * diffuse_albedo(scene_, hit) * kInvPi;
         const IrisGrid& table = iris_light_[hit.eye];
-        const std::size_t groups = group_electrons_.size();
         if (table.side == 0) return;
-        // Where the lit region of a light of a group ends inside the
-        // cell, that group's lights' own caches, which keep the edge
-        // sharp; else the table, cut at the rim of the disc inside the
-        // cornea (build_iris_light).
-        const std::uint8_t* edge = &iris_edge_cells_[hit.eye][static_cast<std::size_t>(table.cell(local)) * groups];
+        for (std::size_t g = 0; g < group_electrons_.size(); ++g) {
+          out.add(scaled_albedo * iris_indirect_[hit.eye].at(local, g), group_electrons_[g]);
+        }
+        // Each light from the table, cut at the rim of the disc inside the
+        // cornea; where its lit region ends inside the cell, from its own
+        // cache, which keeps the edge sharp (build_iris_light).
+        const IrisGrid::Lookup cell = table.lookup(local);
+        const std::size_t lights = lights_.size();
+        const std::uint8_t* edge = &iris_edge_cells_[hit.eye][static_cast<std::size_t>(cell.cell) * lights];
         const double r = iris_inside_radius_mm_[hit.eye];
         const bool inside = local.x * local.x + local.y * local.y < r * r;
-        for (std::size_t g = 0; g < groups; ++g) {
-          out.add(scaled_albedo * iris_indirect_[hit.eye].at(local, g), group_electrons_[g]);
-          if (!edge[g] && inside) out.add(scaled_albedo * table.at(local, g), group_electrons_[g]);
-        }
-        for (std::size_t k = 0; k < lights_.size(); ++k) {
-          if (edge[group_of_light_[k]]) {
-            out.add(scaled_albedo * iris_[hit.eye][k].irradiance_w_m2(hit.point), lights_[k]);
-          }
+        for (std::size_t k = 0; k < lights; ++k) {
+          const double e = edge[k] ? iris_[hit.eye][k].irradiance_w_m2(hit.point) : inside ? table.at(cell, k) : 0.0;
+          out.add(scaled_albedo * e, lights_[k]);
         }
         return;
       }
@@ -360,20 +358,24 @@ class FastIntegrator final : public PathIntegrator {
       return {-half_mm + step_mm * (node % side), -half_mm + step_mm * (node / side), z_mm};
     }
     double* node_values(int node) { return values.data() + static_cast<std::size_t>(node) * channels; }
-    // The cell (x + (side - 1) y, of its lower node) that `at` interpolates in.
-    int cell(const Point3& eye_frame_point) const {
-      const double fx = std::clamp((eye_frame_point.x + half_mm) / step_mm, 0.0, side - 1.0);
-      const double fy = std::clamp((eye_frame_point.y + half_mm) / step_mm, 0.0, side - 1.0);
-      return std::min(static_cast<int>(fx), side - 2) + (side - 1) * std::min(static_cast<int>(fy), side - 2);
-    }
-    double at(const Point3& eye_frame_point, std::size_t channel) const {
-      if (side == 0) return 0;
+    // Where a point falls: its cell (x + (side - 1) y, of its lower node)
+    // and the bilinear weights there, computed once for every channel.
+    struct Lookup {
+      int cell = 0;
+      std::size_t node = 0;  // the cell's lower node
+      double tx = 0, ty = 0;
+    };
+    Lookup lookup(const Point3& eye_frame_point) const {
       const double fx = std::clamp((eye_frame_point.x + half_mm) / step_mm, 0.0, side - 1.0);
       const double fy = std::clamp((eye_frame_point.y + half_mm) / step_mm, 0.0, side - 1.0);
       const int x0 = std::min(static_cast<int>(fx), side - 2), y0 = std::min(static_cast<int>(fy), side - 2);
-      const double tx = fx - x0, ty = fy - y0;
-      const auto v = [&](int x, int y) { return values[(static_cast<std::size_t>(y) * side + x) * channels + channel]; };
-      return (1 - ty) * ((1 - tx) * v(x0, y0) + tx * v(x0 + 1, y0)) + ty * ((1 - tx) * v(x0, y0 + 1) + tx * v(x0 + 1, y0 + 1));
+      return {x0 + (side - 1) * y0, static_cast<std::size_t>(y0) * side + x0, fx - x0, fy - y0};
+    }
+    double at(const Lookup& l, std::size_t channel) const {
+      const auto v = [&](std::size_t node) { return values[node * channels + channel]; };
+      const std::size_t up = l.node + static_cast<std::size_t>(side);
+      return (1 - l.ty) * ((1 - l.tx) * v(l.node) + l.tx * v(l.node + 1)) +
+             l.ty * ((1 - l.tx) * v(up) + l.tx * v(up + 1));
     }
   };
 
@@ -446,15 +448,17 @@ class FastIntegrator final : public PathIntegrator {
     });
   }
 
-  // The iris's irradiance from all lights through the cornea, tabulated
-  // once per eye: a camera ray then looks up one value per group of lights
-  // (lights with one wavelength response add up) instead of every light's
-  // cache. Nodes at half the spacing of the lights' own caches, out to
-  // where an iris point's cell ends; channels: groups. The direct light ends
-  // at the rim of the disc inside the cornea (a caustic's edge, inside the
-  // iris of a one-surface eye): the table holds its continuation beyond,
-  // and a lookup cuts at the rim, so that the edge is not smeared over a
-  // cell (it darkened the iris's outermost pixels by up to a third).
+  // Each light's irradiance on the iris through the cornea, tabulated once
+  // per eye at half the spacing of the lights' own caches, out to where an
+  // iris point's cell ends, read bilinearly: cheaper than a light's cache
+  // (Catmull-Rom over 16 nodes and the exact cosine and Fresnel factor).
+  // The direct light ends at the rim of the disc inside the cornea (inside
+  // the iris of a one-surface eye): the table holds its continuation beyond,
+  // and a lookup cuts at the rim. A cell whose corners disagree about
+  // whether a light reaches them holds that light's edge (the limbus's or
+  // a lid's shadow, the light's horizon on the cornea), and there a lookup
+  // reads that light's own cache. Smeared over a cell, those edges
+  // darkened the iris's outermost pixels by up to a third.
   void build_iris_light(int eye_index, int cache_resolution) {
     const Eye& eye = scene_.eyes[eye_index];
     const EyeModel& m = eye.model();
@@ -462,39 +466,29 @@ class FastIntegrator final : public PathIntegrator {
     if (lights_.empty()) return;
     const std::vector<IrisIrradianceCache>& direct = iris_[eye_index];
     iris_inside_radius_mm_[eye_index] = direct.front().inside_radius_mm();
-    const std::size_t groups = group_electrons_.size();
-    table.resize(direct.front().half_size_mm(), 2 * cache_resolution - 1, groups);
+    const std::size_t lights = lights_.size();
+    table.resize(direct.front().half_size_mm(), 2 * cache_resolution - 1, lights);
     const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
     const double r_max = direct.front().half_size_mm() + 1.5 * table.step_mm;
-    const std::size_t lights = lights_.size();
-    std::vector<std::uint8_t> lit(static_cast<std::size_t>(table.side) * table.side * lights, 0);
     tbb::parallel_for(0, table.side * table.side, [&](int node) {
       const Point3 local = table.node_point(node, z);
       if (std::hypot(local.x, local.y) > r_max) return;
       const Point3 world = eye.world_from_eye() * local;
       double* e = table.node_values(node);
-      for (std::size_t k = 0; k < lights; ++k) {
-        const double direct_k = direct[k].continued_irradiance_w_m2(world);
-        lit[static_cast<std::size_t>(node) * lights + k] = direct_k > 0;
-        e[group_of_light_[k]] += direct_k;
-      }
+      for (std::size_t k = 0; k < lights; ++k) e[k] = direct[k].continued_irradiance_w_m2(world);
     });
-    // A cell whose corners disagree about whether a light reaches them
-    // holds that light's edge (the limbus's or the lids' shadow, the
-    // light's horizon on the cornea); flagged for the light's group, so
-    // that what lights of one group give does not depend on other groups'.
     const int cells = table.side - 1;
     std::vector<std::uint8_t>& edge = iris_edge_cells_[eye_index];
-    edge.assign(static_cast<std::size_t>(cells) * cells * groups, 0);
+    edge.assign(static_cast<std::size_t>(cells) * cells * lights, 0);
     for (int y = 0; y < cells; ++y) {
       for (int x = 0; x < cells; ++x) {
-        const auto at = [&](int dx, int dy, std::size_t k) {
-          return lit[(static_cast<std::size_t>(y + dy) * table.side + x + dx) * lights + k];
+        const auto lit = [&](int dx, int dy, std::size_t k) {
+          return table.values[(static_cast<std::size_t>(y + dy) * table.side + x + dx) * lights + k] > 0;
         };
         for (std::size_t k = 0; k < lights; ++k) {
-          const std::uint8_t a = at(0, 0, k);
-          if (at(1, 0, k) != a || at(0, 1, k) != a || at(1, 1, k) != a) {
-            edge[(static_cast<std::size_t>(y) * cells + x) * groups + group_of_light_[k]] = 1;
+          const bool a = lit(0, 0, k);
+          if (lit(1, 0, k) != a || lit(0, 1, k) != a || lit(1, 1, k) != a) {
+            edge[(static_cast<std::size_t>(y) * cells + x) * lights + k] = 1;
           }
         }
       }
@@ -567,9 +561,9 @@ class FastIntegrator final : public PathIntegrator {
   // Lights with one wavelength response form a group (usually all of them).
   std::vector<double> group_electrons_;        // [group]: electrons per unit radiance
   std::vector<std::size_t> group_of_light_;    // [light]
-  std::vector<IrisGrid> iris_light_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: groups
+  std::vector<IrisGrid> iris_light_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: lights
   std::vector<double> iris_inside_radius_mm_ = std::vector<double>(scene_.eyes.size(), 0.0);  // [eye]
-  std::vector<std::vector<std::uint8_t>> iris_edge_cells_ = std::vector<std::vector<std::uint8_t>>(scene_.eyes.size());  // [eye][cell][group]
+  std::vector<std::vector<std::uint8_t>> iris_edge_cells_ = std::vector<std::vector<std::uint8_t>>(scene_.eyes.size());  // [eye][cell][light]
   std::uint64_t seed_ = 0;
   std::unique_ptr<DiffuseCache> diffuse_;
   std::unique_ptr<VisibilityCache> visibility_;

@@ -125,15 +125,15 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--pixel-filter", request->pixel_filter,
                      "How a pixel weighs the image about its centre: box (its own square),\n"
                      "gaussian or blackman-harris (for comparing with other renderers)")
-      ->check(CLI::IsMember({"box", "gaussian", "blackman-harris"}))
+      ->check(CLI::IsMember(renderer::pixel_filter_names()))
       ->capture_default_str();
   render->add_option("--pixel-filter-width", options.pixel_filter.width_px,
                      "Width of the pixel filter's square of support, px (0: box 1, the others 3)")
       ->check(CLI::Validator(
           [](const std::string& text) -> std::string {
             double w = -1;
-            if (!CLI::detail::lexical_cast(text, w) || !(w == 0 || (w >= 0.25 && w <= 16))) {
-              return "must be 0 (the filter's usual width) or in [0.25, 16], not " + text;
+            if (!CLI::detail::lexical_cast(text, w) || !renderer::pixel_filter_width_allowed(w)) {
+              return std::string(renderer::kPixelFilterWidthRule) + ", not " + text;
             }
             return {};
           },

@@ -73,7 +73,6 @@ double EyeModel::iris_outer_radius_mm() const {
   return std::max(iris_radius_mm, shell_radius_mm(*this, iris_depth_mm));
 }
 
-
 UnitVector3 optical_axis_from_yaw_pitch(double yaw, double pitch) {
   return UnitVector3::normalize(
       {std::sin(yaw) * std::cos(pitch), -std::sin(pitch), -std::cos(yaw) * std::cos(pitch)});

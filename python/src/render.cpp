@@ -94,8 +94,12 @@ std::shared_ptr<Rendered> render(const Scene& scene, const py::object& camera, c
   o.edge_samples_per_pixel = edge_samples_per_pixel;
   const std::optional<renderer::PixelFilterKind> filter = renderer::pixel_filter_kind(pixel_filter);
   if (!filter) {
-    throw std::invalid_argument("render: pixel_filter = \"" + pixel_filter +
-                                "\": must be \"box\", \"gaussian\" or \"blackman-harris\"");
+    const std::vector<std::string>& names = renderer::pixel_filter_names();
+    std::string valid;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      valid += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + ("\"" + names[i] + "\"");
+    }
+    throw std::invalid_argument("render: pixel_filter = \"" + pixel_filter + "\": must be " + valid);
   }
   o.pixel_filter = {*filter, pixel_filter_width};  // the width is checked by the renderer
   o.seed = seed;

@@ -184,7 +184,7 @@ class FastIntegrator final : public PathIntegrator {
         const IrisGrid::Lookup cell = table.lookup(local);
         const std::size_t lights = lights_.size();
         const std::uint8_t* edge = &iris_edge_cells_[hit.eye][static_cast<std::size_t>(cell.cell) * lights];
-        const double r = iris_inside_radius_mm_[hit.eye];
+        const double r = iris_[hit.eye].front().inside_radius_mm();
         const bool inside = local.x * local.x + local.y * local.y < r * r;
         for (std::size_t k = 0; k < lights; ++k) {
           const double e = edge[k] ? iris_[hit.eye][k].irradiance_w_m2(hit.point) : inside ? table.at(cell, k) : 0.0;
@@ -465,7 +465,6 @@ class FastIntegrator final : public PathIntegrator {
     IrisGrid& table = iris_light_[eye_index];
     if (lights_.empty()) return;
     const std::vector<IrisIrradianceCache>& direct = iris_[eye_index];
-    iris_inside_radius_mm_[eye_index] = direct.front().inside_radius_mm();
     const std::size_t lights = lights_.size();
     table.resize(direct.front().half_size_mm(), 2 * cache_resolution - 1, lights);
     const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
@@ -562,7 +561,6 @@ class FastIntegrator final : public PathIntegrator {
   std::vector<double> group_electrons_;        // [group]: electrons per unit radiance
   std::vector<std::size_t> group_of_light_;    // [light]
   std::vector<IrisGrid> iris_light_ = std::vector<IrisGrid>(scene_.eyes.size());  // [eye], channels: lights
-  std::vector<double> iris_inside_radius_mm_ = std::vector<double>(scene_.eyes.size(), 0.0);  // [eye]
   std::vector<std::vector<std::uint8_t>> iris_edge_cells_ = std::vector<std::vector<std::uint8_t>>(scene_.eyes.size());  // [eye][cell][light]
   std::uint64_t seed_ = 0;
   std::unique_ptr<DiffuseCache> diffuse_;

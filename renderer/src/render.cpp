@@ -48,12 +48,28 @@ const char* to_string(PixelFilterKind kind) {
   return "unknown";
 }
 
+namespace {
+constexpr PixelFilterKind kPixelFilterKinds[] = {PixelFilterKind::box, PixelFilterKind::gaussian,
+                                                 PixelFilterKind::blackman_harris};
+}  // namespace
+
 std::optional<PixelFilterKind> pixel_filter_kind(const std::string& name) {
-  for (const PixelFilterKind k : {PixelFilterKind::box, PixelFilterKind::gaussian, PixelFilterKind::blackman_harris}) {
+  for (const PixelFilterKind k : kPixelFilterKinds) {
     if (name == to_string(k)) return k;
   }
   return std::nullopt;
 }
+
+const std::vector<std::string>& pixel_filter_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const PixelFilterKind k : kPixelFilterKinds) out.emplace_back(to_string(k));
+    return out;
+  }();
+  return names;
+}
+
+bool pixel_filter_width_allowed(double width_px) { return width_px == 0 || (width_px >= 0.25 && width_px <= 16); }
 
 double pixel_filter_width_px(const PixelFilter& filter) {
   if (filter.width_px != 0) return filter.width_px;
@@ -99,9 +115,9 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
                                   std::to_string(k.height) + " image");
     }
   }
-  if (const double w = options.pixel_filter.width_px; !(w == 0 || (w >= 0.25 && w <= 16))) {
-    throw std::invalid_argument("render: pixel_filter width_px = " + check::format_number(w) +
-                                ": must be 0 (the filter's usual width) or in [0.25, 16]");
+  if (const double w = options.pixel_filter.width_px; !pixel_filter_width_allowed(w)) {
+    throw std::invalid_argument("render: pixel_filter width_px = " + check::format_number(w) + ": " +
+                                kPixelFilterWidthRule);
   }
   if (options.threads < 0) {
     throw std::invalid_argument("render: threads = " + std::to_string(options.threads) +

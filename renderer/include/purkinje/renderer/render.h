@@ -48,6 +48,8 @@ struct PixelRegion {
 enum class PixelFilterKind { box, gaussian, blackman_harris };
 const char* to_string(PixelFilterKind kind);  // "box", "gaussian", "blackman-harris"
 std::optional<PixelFilterKind> pixel_filter_kind(const std::string& name);
+// Every kind's name, in the enum's order.
+const std::vector<std::string>& pixel_filter_names();
 
 struct PixelFilter {
   PixelFilterKind kind = PixelFilterKind::box;
@@ -57,6 +59,10 @@ struct PixelFilter {
 };
 // The width a filter has (its own, or its kind's usual one).
 double pixel_filter_width_px(const PixelFilter& filter);
+// Whether `width_px` may be given: 0 (the kind's usual) or within
+// [0.25, 16] px; the rule as render() states it when it is broken.
+bool pixel_filter_width_allowed(double width_px);
+inline constexpr const char* kPixelFilterWidthRule = "must be 0 (the filter's usual width) or in [0.25, 16]";
 
 struct RenderOptions {
   RenderMode mode = RenderMode::fast;

@@ -459,6 +459,28 @@ EyeAppearance read_appearance(Object& e) {
     a.eyelids = lids;
   }
 
+  if (auto face_value = e.optional("face")) {
+    if (!a.eyelids) face_value->fail("only used with eyelids (add \"eyelids\": {})");
+    Object o(*face_value);
+    Face face;
+    if (auto side = o.optional("side")) {
+      const std::string name = side->as_string();
+      if (name != "right" && name != "left") side->fail("must be \"right\" or \"left\" (which eye of the face)");
+      face.side = name == "right" ? EyeSide::right : EyeSide::left;
+    }
+    // Bounds a face can have; beyond them the surface folds over itself or
+    // leaves the grid the renderer builds it on.
+    face.margin_thickness_mm = o.within_or("margin_thickness_mm", 0.5, 4, face.margin_thickness_mm);
+    face.crease_height_mm = o.within_or("crease_height_mm", 0, 15, face.crease_height_mm);
+    face.crease_depth_mm = o.within_or("crease_depth_mm", 0, 2, face.crease_depth_mm);
+    face.canthal_tilt_deg = o.within_or("canthal_tilt_deg", -15, 15, face.canthal_tilt_deg);
+    face.lateral_canthus_mm = o.within_or("lateral_canthus_mm", 5, 20, face.lateral_canthus_mm);
+    face.brow_prominence_mm = o.within_or("brow_prominence_mm", -8, 12, face.brow_prominence_mm);
+    face.midline_mm = o.within_or("midline_mm", 20, 45, face.midline_mm);
+    o.finish();
+    a.face = face;
+  }
+
   if (auto head_value = e.optional("head")) {
     // The head frame places nothing but the lids and skin.
     if (!a.eyelids) head_value->fail("only used with eyelids (add \"eyelids\": {})");
@@ -734,6 +756,17 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
                     {"upper_gain_downgaze", l.upper_gain_downgaze},
                     {"lower_gain_upgaze", l.lower_gain_upgaze},
                     {"lower_gain_downgaze", l.lower_gain_downgaze}};
+    if (a.face) {
+      const Face& f = *a.face;
+      o["face"] = {{"side", f.side == EyeSide::right ? "right" : "left"},
+                   {"margin_thickness_mm", f.margin_thickness_mm},
+                   {"crease_height_mm", f.crease_height_mm},
+                   {"crease_depth_mm", f.crease_depth_mm},
+                   {"canthal_tilt_deg", f.canthal_tilt_deg},
+                   {"lateral_canthus_mm", f.lateral_canthus_mm},
+                   {"brow_prominence_mm", f.brow_prominence_mm},
+                   {"midline_mm", f.midline_mm}};
+    }
     o["head"] = {{"forward", direction(a.head_forward)}, {"up", direction(a.head_up)}};
   }
   return o;

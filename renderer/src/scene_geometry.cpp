@@ -142,7 +142,56 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
   }
 }
 
-void add_lids(SurfaceList& list, int index, const Scene& scene) {
+// The face (face_mesh.h) in place of the lid sphere, socket and wall, and
+// the socket's floor, the plane z = 0 of the head frame: seen only through
+// the canthi, where the opening reaches past the globe (elsewhere the
+// globe and the lids hide it, and no ray inside the eye gets behind the
+// iris plane).
+void add_face(SceneGeometry& geometry, const Scene& scene, int index, const Eye& eye,
+              const std::shared_ptr<const Frame>& head,
+              const surfaces::MarginTurns& turns, std::size_t eyeball_begin) {
+  std::vector<const PlacedSurface*> outer;
+  for (std::size_t i = eyeball_begin; i < geometry.surfaces.size(); ++i) {
+    const Surface kind = geometry.surfaces[i]->kind();
+    if (kind == Surface::cornea_anterior || kind == Surface::sclera) outer.push_back(geometry.surfaces[i].get());
+  }
+  const Pose& H = head->world_from_local();
+  constexpr double kFarMm = 100.0;  // in front of any eye surface (head frame z)
+  const UnitVector3 back = H * -UnitVector3::unit_z();
+  const auto support_depth = [&](double x, double y) -> std::optional<double> {
+    Lane lane;
+    lane.origin = H * Point3{x, y, kFarMm};
+    lane.direction = back;
+    lane.t_lo = 0;
+    lane.t_hi = 2 * kFarMm;
+    bool found = false;
+    for (const PlacedSurface* s : outer) {
+      double t;
+      Point3 local;
+      if (s->hit(lane, t, local)) {
+        lane.t_hi = t;
+        found = true;
+      }
+    }
+    if (!found) return std::nullopt;
+    return kFarMm - lane.t_hi;
+  };
+  bool alone = true;
+  for (std::size_t j = 0; j < scene.eyes.size(); ++j) {
+    if (static_cast<int>(j) != index && scene.eyes[j].appearance().face) alone = false;
+  }
+  geometry.meshes.push_back(
+      std::make_unique<PlacedMesh>(index, build_face_mesh(eye, H, turns, support_depth, alone)));
+
+  const Eyelids& lids = *eye.appearance().eyelids;
+  surfaces::PlaneRegion floor;
+  floor.z_mm = 0.0;
+  floor.outer_radius_mm = lids.half_width_mm + 3.0;
+  add(geometry.surfaces, Surface::skin, index, head, std::move(floor));
+}
+
+void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_t eyeball_begin) {
+  SurfaceList& list = geometry.surfaces;
   const Eye& eye = scene.eyes[index];
   const EyeAppearance& look = eye.appearance();
   const Eyelids& lids = *look.eyelids;
@@ -177,6 +226,10 @@ void add_lids(SurfaceList& list, int index, const Scene& scene) {
   const double elevation = surfaces::eye_elevation_rad(head_from_world * eye.optical_axis().vector());
   const surfaces::MarginTurns turns = surfaces::margin_turns(
       lids.upper_gain_upgaze, lids.upper_gain_downgaze, lids.lower_gain_upgaze, lids.lower_gain_downgaze, elevation);
+  if (look.face) {
+    add_face(geometry, scene, index, eye, world_from_head, turns, eyeball_begin);
+    return;
+  }
   lid.opening.upper_turn = surfaces::MarginTurn::by(turns.upper_rad);
   lid.opening.lower_turn = surfaces::MarginTurn::by(turns.lower_rad);
   add(list, Surface::skin, index, world_from_head, lid);
@@ -210,8 +263,9 @@ SceneGeometry build_scene_geometry(const Scene& scene) {
   SceneGeometry geometry;
   for (std::size_t i = 0; i < scene.eyes.size(); ++i) {
     const int index = static_cast<int>(i);
+    const std::size_t eyeball_begin = geometry.surfaces.size();
     add_eyeball(geometry.surfaces, index, scene.eyes[i]);
-    if (scene.eyes[i].appearance().eyelids) add_lids(geometry.surfaces, index, scene);
+    if (scene.eyes[i].appearance().eyelids) add_lids(geometry, index, scene, eyeball_begin);
   }
   for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
     check_mesh(static_cast<int>(i), scene.meshes[i]);

@@ -61,6 +61,7 @@
 
 #include "purkinje/models/scene.h"
 #include "purkinje/renderer/ray_tracer.h"
+#include "face_mesh.h"
 #include "surfaces.h"
 
 namespace purkinje::renderer {
@@ -206,12 +207,22 @@ class Placed final : public PlacedSurface {
 };
 
 // One mesh: Embree finds the triangle in float, the hit is recomputed here
-// from the double vertices (see the file's comment).
+// from the double vertices (see the file's comment). Either one of the
+// scene's meshes (Surface::mesh, flat triangles) or an eye's face
+// (Surface::skin, face_mesh.h, shaded with its vertices' normals).
 class PlacedMesh {
  public:
   PlacedMesh(int index, const Mesh& mesh)
-      : index_(index), vertices_(mesh.vertices), triangles_(mesh.triangles) {}
+      : kind_(Surface::mesh), index_(index), vertices_(mesh.vertices), triangles_(mesh.triangles) {}
+  PlacedMesh(int eye, FaceMesh face)
+      : kind_(Surface::skin),
+        index_(eye),
+        vertices_(std::move(face.vertices)),
+        triangles_(std::move(face.triangles)),
+        normals_(std::move(face.normals)) {}
 
+  Surface kind() const { return kind_; }
+  // Into scene.meshes for Surface::mesh, scene.eyes for Surface::skin.
   int index() const { return index_; }
   const std::vector<Point3>& vertices() const { return vertices_; }
   const std::vector<Triangle>& triangles() const { return triangles_; }
@@ -228,6 +239,25 @@ class PlacedMesh {
     if (!(r > lane.t_lo && r < lane.t_hi)) return false;
     t = r;
     return true;
+  }
+
+  // For shading: the vertices' normals interpolated at `p` (on the
+  // triangle's plane) by barycentric coordinates computed in double, so
+  // that every Embree kernel gives the same bytes; the triangle's own
+  // normal for a mesh without vertex normals.
+  UnitVector3 shading_normal(unsigned triangle, const Point3& p) const {
+    if (normals_.empty()) return normal(triangle);
+    const Triangle& v = triangles_[triangle];
+    const Point3& p0 = vertices_[v[0]];
+    const Vector3 n = cross(vertices_[v[1]] - p0, vertices_[v[2]] - p0);
+    const double area = dot(n, n);
+    if (!(area > 0)) return normal(triangle);
+    const double b1 = dot(cross(p - p0, vertices_[v[2]] - p0), n) / area;
+    const double b2 = dot(cross(vertices_[v[1]] - p0, p - p0), n) / area;
+    const Vector3 mixed = normals_[v[0]].vector() * (1 - b1 - b2) + normals_[v[1]].vector() * b1 +
+                          normals_[v[2]].vector() * b2;
+    const auto unit = UnitVector3::try_normalize(mixed);
+    return unit ? *unit : normal(triangle);
   }
 
   UnitVector3 normal(unsigned triangle) const {
@@ -257,9 +287,11 @@ class PlacedMesh {
   }
 
  private:
+  Surface kind_;
   int index_;
   std::vector<Point3> vertices_;
   std::vector<Triangle> triangles_;
+  std::vector<UnitVector3> normals_;  // per vertex; empty: flat
 };
 
 using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
@@ -290,10 +322,17 @@ inline Hit hit_of(const Ray& ray, const Lane& lane) {
   Hit hit;
   if (!lane.found()) return hit;
   if (lane.mesh) {
-    hit.surface = Surface::mesh;
-    hit.mesh = lane.mesh->index();
+    const PlacedMesh& mesh = *lane.mesh;
+    hit.surface = mesh.kind();
+    (mesh.kind() == Surface::mesh ? hit.mesh : hit.eye) = mesh.index();
     hit.triangle = static_cast<int>(lane.triangle);
-    hit.normal = lane.mesh->normal(lane.triangle);
+    hit.t = lane.t_hi;
+    hit.point = ray.origin + ray.direction * lane.t_hi;
+    // Which side the ray meets is the triangle's; the shading normal may
+    // lean past the ray at a silhouette.
+    hit.front_face = dot(ray.direction, mesh.normal(lane.triangle)) < 0;
+    hit.normal = mesh.shading_normal(lane.triangle, hit.point);
+    return hit;
   } else {
     hit.surface = lane.surface->kind();
     hit.eye = lane.surface->eye();

@@ -514,6 +514,50 @@ TEST(SceneFile, EyelidHeightsMustCloseBetweenTheMargins) {
   }
 }
 
+TEST(SceneFile, ReadsEveryFaceKeyAndWritesThemBack) {
+  const Scene scene = parse_scene(eye_with(R"("eyelids": {}, "face": { "side": "left", "margin_thickness_mm": 2.2,
+      "crease_height_mm": 0, "crease_depth_mm": 1.1, "canthal_tilt_deg": -3, "lateral_canthus_mm": 10.5,
+      "brow_prominence_mm": -2, "midline_mm": 33 })"),
+                                  "s.json");
+  const Face& f = *scene.eyes[0].appearance().face;
+  EXPECT_EQ(f.side, EyeSide::left);
+  EXPECT_DOUBLE_EQ(f.margin_thickness_mm, 2.2);
+  EXPECT_DOUBLE_EQ(f.crease_height_mm, 0);
+  EXPECT_DOUBLE_EQ(f.crease_depth_mm, 1.1);
+  EXPECT_DOUBLE_EQ(f.canthal_tilt_deg, -3);
+  EXPECT_DOUBLE_EQ(f.lateral_canthus_mm, 10.5);
+  EXPECT_DOUBLE_EQ(f.brow_prominence_mm, -2);
+  EXPECT_DOUBLE_EQ(f.midline_mm, 33);
+  const Face back = *parse_scene(scene_to_json(scene), "back.json").eyes[0].appearance().face;
+  EXPECT_EQ(back.side, f.side);
+  EXPECT_EQ(back.margin_thickness_mm, f.margin_thickness_mm);
+  EXPECT_EQ(back.crease_height_mm, f.crease_height_mm);
+  EXPECT_EQ(back.crease_depth_mm, f.crease_depth_mm);
+  EXPECT_EQ(back.canthal_tilt_deg, f.canthal_tilt_deg);
+  EXPECT_EQ(back.lateral_canthus_mm, f.lateral_canthus_mm);
+  EXPECT_EQ(back.brow_prominence_mm, f.brow_prominence_mm);
+  EXPECT_EQ(back.midline_mm, f.midline_mm);
+  // Without "face" the lids keep their sphere.
+  EXPECT_FALSE(parse_scene(eye_with(R"("eyelids": {})"), "s.json").eyes[0].appearance().face.has_value());
+}
+
+TEST(SceneFile, FaceErrorsNameTheKeyAndTheRule) {
+  EXPECT_EQ(parse_error(eye_with(R"("face": {})")).find("scene.json: eyes[0].face"), 0u)
+      << parse_error(eye_with(R"("face": {})"));
+  EXPECT_NE(parse_error(eye_with(R"("face": {})")).find("only used with eyelids"), std::string::npos);
+  const std::map<std::string, std::string> bad = {
+      {R"({ "side": "up" })", "eyes[0].face.side = \"up\": must be \"right\" or \"left\""},
+      {R"({ "margin_thickness_mm": 0.1 })", "eyes[0].face.margin_thickness_mm = 0.1: must be between 0.5 and 4"},
+      {R"({ "lateral_canthus_mm": 25 })", "eyes[0].face.lateral_canthus_mm = 25: must be between 5 and 20"},
+      {R"({ "canthal_tilt_deg": 30 })", "eyes[0].face.canthal_tilt_deg = 30: must be between -15 and 15"},
+      {R"({ "nose": 1 })", "eyes[0].face.nose = 1: unknown key"},
+  };
+  for (const auto& [face, expected] : bad) {
+    const std::string error = parse_error(eye_with(R"("eyelids": {}, "face": )" + face));
+    EXPECT_EQ(error.find("scene.json: " + expected), 0u) << face << "\n  message: " << error;
+  }
+}
+
 TEST(SceneFile, HeadFrameIsNormalizedWithUpMadePerpendicular) {
   // forward [0, 0, -2] -> (0, 0, -1); up [0, -1, -1] has 1 along forward,
   // which is removed: (0, -1, -1) - 1 x (0, 0, -1) = (0, -1, 0).

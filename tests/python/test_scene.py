@@ -9,7 +9,7 @@ import pytest
 import purkinje
 from conftest import SOURCE_DIR, cli_error
 
-SCENES = ["remote", "headset", "remote_glasses"] + sorted(
+SCENES = ["remote", "headset", "remote_glasses", "remote_face"] + sorted(
     "hard/" + p.stem for p in (SOURCE_DIR / "assets/scenes/hard").glob("*.json"))
 
 

@@ -332,9 +332,12 @@ struct GlintCheck {
 GlintCheck check_glints(const Scene& scene, int samples) {
   const Camera& camera = scene.cameras[0];
   const SceneTruth truth = compute_truth(scene);
+  // Camera 0's views are the first, one per eye.
   std::vector<Pixel> visible;
-  for (const GlintTruth& g : truth.views[0].glints) {
-    if (g.status == PathStatus::ok) visible.push_back(g.pixel);
+  for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+    for (const GlintTruth& g : truth.views[e].glints) {
+      if (g.status == PathStatus::ok) visible.push_back(g.pixel);
+    }
   }
   GlintCheck check;
   if (visible.empty()) return check;
@@ -348,12 +351,12 @@ GlintCheck check_glints(const Scene& scene, int samples) {
   const RenderResult r = render(scene, 0, options);
   for (const GlintImage& g : r.glints) {
     if (g.status != PathStatus::ok) continue;
-    const Pixel label = r.truth.views[0].glints[g.illuminator].pixel;
+    const Pixel label = r.truth.views[g.eye].glints[g.illuminator].pixel;
     bool isolated = label.u > 4 && label.v > 4 && label.u < camera.intrinsics().width - 5 &&
                     label.v < camera.intrinsics().height - 5;
     for (const GlintImage& other : r.glints) {
       if (&other == &g || other.status != PathStatus::ok) continue;
-      const Pixel q = r.truth.views[0].glints[other.illuminator].pixel;
+      const Pixel q = r.truth.views[other.eye].glints[other.illuminator].pixel;
       if (std::hypot(q.u - label.u, q.v - label.v) < 4) isolated = false;
     }
     if (!isolated) continue;
@@ -378,7 +381,7 @@ GlintCheck check_glints(const Scene& scene, int samples) {
 }
 
 TEST(RenderGlints, BundledScenesCentroidsMatchLabels) {
-  for (const char* name : {"remote", "headset"}) {
+  for (const char* name : {"remote", "headset", "remote_face"}) {
     Scene scene = bundled(name);
     open_eyelids(scene);
     const GlintCheck check = check_glints(scene, 4);
@@ -390,13 +393,13 @@ TEST(RenderGlints, BundledScenesCentroidsMatchLabels) {
 }
 
 // 100 random scenes: remote (300-800 mm, 2-4 LEDs near the camera) and
-// headset (25-45 mm, LED rings), eye models, gaze up to 25 degrees.
-TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
-  std::mt19937_64 rng(20261122);
+// headset (25-45 mm, LED rings), eye models, gaze up to 25 degrees; with
+// `face`, the periocular face with random lids, crease, tilt and brow.
+GlintCheck random_scenes_glints(bool face, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const auto between = [&](double a, double b) { return a + (b - a) * unit(rng); };
-  int glints = 0;
-  double worst = 0, worst_with_background = 0;
+  GlintCheck total;
   for (int i = 0; i < 100; ++i) {
     const bool remote = i % 2 == 0;
     Scene scene = bundled(remote ? "remote" : "headset");
@@ -411,6 +414,18 @@ TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
     EyeAppearance look;
     look.eyelids = Eyelids{};
     look.iris_seed = i;
+    if (face) {
+      look.eyelids->opening = between(0.5, 1.0);
+      Face f;
+      f.side = i % 4 < 2 ? EyeSide::right : EyeSide::left;
+      f.margin_thickness_mm = between(1.0, 2.5);
+      f.crease_height_mm = between(4, 10);
+      f.crease_depth_mm = between(0, 1);
+      f.canthal_tilt_deg = between(-5, 10);
+      f.lateral_canthus_mm = between(10, 11.5);
+      f.brow_prominence_mm = between(-2, 6);
+      look.face = f;
+    }
     eye.set_appearance(look);
     scene.eyes = {eye};
     // A 200 x 160 crop of the middle of the image: the labels and pixels
@@ -434,14 +449,29 @@ TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
       }
     }
     const GlintCheck check = check_glints(scene, 1);
-    glints += check.glints;
-    worst = std::max(worst, check.worst_px);
-    worst_with_background = std::max(worst_with_background, check.worst_with_background_px);
+    total.glints += check.glints;
+    total.worst_px = std::max(total.worst_px, check.worst_px);
+    total.worst_with_background_px = std::max(total.worst_with_background_px, check.worst_with_background_px);
   }
-  EXPECT_GT(glints, 150);
-  RecordProperty("glints", glints);
-  RecordProperty("worst_glint_px", std::to_string(worst));
-  RecordProperty("worst_with_background_px", std::to_string(worst_with_background));
+  return total;
+}
+
+TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
+  const GlintCheck check = random_scenes_glints(false, 20261122);
+  EXPECT_GT(check.glints, 150);
+  RecordProperty("glints", check.glints);
+  RecordProperty("worst_glint_px", std::to_string(check.worst_px));
+  RecordProperty("worst_with_background_px", std::to_string(check.worst_with_background_px));
+}
+
+// The same with faces: lids, margins and brows shade and hide glints, and
+// the labels say which (an occluded glint is not checked, a visible one is).
+TEST(RenderGlints, RandomFaceScenesCentroidsMatchLabels) {
+  const GlintCheck check = random_scenes_glints(true, 20261127);
+  EXPECT_GT(check.glints, 120);
+  RecordProperty("glints", check.glints);
+  RecordProperty("worst_glint_px", std::to_string(check.worst_px));
+  RecordProperty("worst_with_background_px", std::to_string(check.worst_with_background_px));
 }
 
 // ------------------------------------------------ pupil agrees with labels

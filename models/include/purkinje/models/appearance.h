@@ -59,6 +59,41 @@ struct Eyelids {
   double lower_gain_downgaze = 0.6;
 };
 
+// Which of a face's eyes this is: it sets which side the nose is on.
+enum class EyeSide { right, left };
+
+// The periocular region as a face (docs/scene-format.md: face): in place
+// of the lid sphere and the flat wall, the renderer builds a skin surface
+// per eye from these numbers and the lids' margins (Eyelids): lids that lie
+// on the eye (cornea included, in its current gaze) with a rounded margin
+// of real thickness, an upper-lid crease, canthi tied to the head (only
+// the margins' middles follow the gaze), a brow ridge, a cheek and the
+// side of the nose up to the face's midline, where the other eye's face
+// begins. Lengths in the head frame (origin at the centre of rotation,
+// forward out of the face, up along the head).
+struct Face {
+  EyeSide side = EyeSide::right;
+  // From the globe to the lid's skin at the margins: the margin's width.
+  double margin_thickness_mm = 1.8;
+  // Upper-lid crease above the upper margin at the middle (0: no crease),
+  // and how deep its fold is.
+  double crease_height_mm = 7.0;
+  double crease_depth_mm = 0.6;
+  // Rise of the line through the canthi toward the lateral canthus.
+  double canthal_tilt_deg = 4.0;
+  // The lateral canthus's distance from the centre of rotation across the
+  // head: the lids meet on the globe there (less than the sclera's
+  // radius), while eyelids.half_width_mm places the medial canthus, past
+  // the globe, where the socket's floor (the caruncle) fills the opening.
+  double lateral_canthus_mm = 11.0;
+  // How far the brow ridge stands in front of the corneal apex (primary
+  // position); negative: behind it (deep-set brows).
+  double brow_prominence_mm = 3.0;
+  // From the centre of rotation to the face's midline (half the
+  // interpupillary distance): the nose's ridge.
+  double midline_mm = 31.5;
+};
+
 struct EyeAppearance {
   double iris_albedo = 0.25;           // mean of the textured iris
   double iris_texture_contrast = 0.5;  // 0: flat iris; 1: albedo varies by about +-100% of the mean
@@ -74,6 +109,9 @@ struct EyeAppearance {
   UnitVector3 head_up = -UnitVector3::unit_y();
   // Absent: no lids and no skin; the eye floats on a black background.
   std::optional<Eyelids> eyelids;
+  // Absent: the lids lie on a sphere in a flat wall (Eyelids); present
+  // (with eyelids only): the periocular face above.
+  std::optional<Face> face;
 };
 
 }  // namespace purkinje

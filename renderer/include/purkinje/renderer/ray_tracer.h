@@ -50,9 +50,9 @@ struct Ray {
 
 struct Hit {
   Surface surface = Surface::none;
-  int eye = -1;             // index into scene.eyes (-1 for meshes)
+  int eye = -1;             // index into scene.eyes (-1 for Surface::mesh)
   int mesh = -1;            // index into scene.meshes (Surface::mesh only)
-  int triangle = -1;        // index into that mesh's triangles
+  int triangle = -1;        // index into that mesh's (or face's) triangles
   double t = 0;             // distance along the ray, mm
   Point3 point;             // world, recomputed in double precision
   // Outward: out of the eye; toward the front for skin and iris; for a

@@ -47,6 +47,10 @@
 //                     canthi the opening reaches beyond the eyeball's
 //                     silhouette, and rays through that gap meet the socket
 //                     (from inside) instead of the background.
+//   face              with a face (appearance.h) instead of the three
+//                     above: a mesh built per image (face_mesh.h), kind
+//                     skin, and the socket's floor, the plane z = 0 out to
+//                     the eyelids' half width + 3 mm.
 // Outward normals: out of the eye, forward for the iris, pupil and face,
 // away from the centre of rotation for the lids.
 // Meshes (scene.meshes, world coordinates): one Embree triangle geometry

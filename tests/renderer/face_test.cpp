@@ -161,7 +161,9 @@ TEST(Face, AFaceAloneGoesOnPastTheMidlineWithTwoFacesEachEndsThere) {
   for (double x = 20; x <= 43; x += 0.05) {
     const Hit hit = look_down_z(tracer, x, -10);
     ASSERT_EQ(hit.surface, Surface::skin) << x;
-    EXPECT_EQ(hit.eye, x < 31.5 ? 0 : 1) << x;
+    // On the midline itself both faces' edges lie; which one a ray along
+    // it meets is Embree's kernel's choice.
+    if (std::abs(x - 31.5) > 1e-6) EXPECT_EQ(hit.eye, x < 31.5 ? 0 : 1) << x;
   }
 }
 

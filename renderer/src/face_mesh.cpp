@@ -84,7 +84,11 @@ double margin_turned(double m, double x, double radius, const surfaces::MarginTu
   return m * turn.cos + z * turn.sin;
 }
 
-}  // namespace
+// The margins' heights at x (head frame), as the mesh's row 0 has them.
+struct FissureMargins {
+  double upper_mm = 0;
+  double lower_mm = 0;
+};
 
 FissureMargins fissure_margins(const Eyelids& lids, const Face& face, double sclera_radius_mm,
                                const surfaces::MarginTurns& turns, double x) {
@@ -107,6 +111,8 @@ FissureMargins fissure_margins(const Eyelids& lids, const Face& face, double scl
   if (m.upper_mm < m.lower_mm) m.upper_mm = m.lower_mm = 0.5 * (m.upper_mm + m.lower_mm);
   return m;
 }
+
+}  // namespace
 
 FaceMesh build_face_mesh(const Eye& eye, const Pose& world_from_head, const surfaces::MarginTurns& turns,
                          const SupportDepth& support_depth, bool alone) {
@@ -151,6 +157,11 @@ FaceMesh build_face_mesh(const Eye& eye, const Pose& world_from_head, const surf
 
   // Global rows bottom to top: the lower lid's, far to near, then the
   // upper lid's, near to far. `upper_start` is the upper lid's row 0.
+  // The margins depend on the column only.
+  std::vector<FissureMargins> column_margins;
+  column_margins.reserve(columns.size());
+  for (double x : columns) column_margins.push_back(fissure_margins(lids, face, globe, turns, x));
+
   const std::size_t lower_count = lower_rows.size();
   const std::size_t row_count = lower_count + upper_rows.size();
   const std::size_t column_count = columns.size();
@@ -171,7 +182,7 @@ FaceMesh build_face_mesh(const Eye& eye, const Pose& world_from_head, const surf
     for (std::size_t c = 0; c < column_count; ++c) {
       const double x = columns[c];
       const double n = nasal * x;
-      const FissureMargins margins = fissure_margins(lids, face, globe, turns, x);
+      const FissureMargins& margins = column_margins[c];
       const double margin = upper ? margins.upper_mm : margins.lower_mm;
       const double y = margin * (1 - straighten) + far_line * straighten + side * d;
 

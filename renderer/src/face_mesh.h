@@ -65,12 +65,4 @@ using SupportDepth = std::function<std::optional<double>(double x, double y)>;
 FaceMesh build_face_mesh(const Eye& eye, const Pose& world_from_head, const surfaces::MarginTurns& turns,
                          const SupportDepth& support_depth, bool alone);
 
-// The margins' heights at x (head frame), as the mesh's row 0 has them.
-struct FissureMargins {
-  double upper_mm = 0;
-  double lower_mm = 0;
-};
-FissureMargins fissure_margins(const Eyelids& lids, const Face& face, double sclera_radius_mm,
-                               const surfaces::MarginTurns& turns, double x_mm);
-
 }  // namespace purkinje::renderer

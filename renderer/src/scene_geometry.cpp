@@ -203,17 +203,6 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
   const Pose head_from_world = head_pose.inverse();
   const auto world_from_head = std::make_shared<const Frame>(head_pose);
 
-  const double R_l = eye.model().rotation_center_depth_mm + kLidClearanceMm;
-  const double z_f = kFaceHeightFraction * R_l;
-  surfaces::EyelidSphere lid;
-  lid.radius_mm = R_l;
-  lid.min_z_mm = z_f;
-  lid.max_z_mm = R_l;
-  lid.opening.opening = lids.opening;
-  lid.opening.upper_margin_mm = lids.upper_margin_mm;
-  lid.opening.lower_margin_mm = lids.lower_margin_mm;
-  lid.opening.closing_line_mm = lids.closing_line_mm;
-  lid.opening.half_width_mm = lids.half_width_mm;
   // The margins follow the eye's vertical rotation (Eyelids in appearance.h).
   for (const auto& [key, gain] : {std::pair{"upper_gain_upgaze", lids.upper_gain_upgaze},
                                   std::pair{"upper_gain_downgaze", lids.upper_gain_downgaze},
@@ -230,6 +219,17 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
     add_face(geometry, scene, index, eye, world_from_head, turns, eyeball_begin);
     return;
   }
+  const double R_l = eye.model().rotation_center_depth_mm + kLidClearanceMm;
+  const double z_f = kFaceHeightFraction * R_l;
+  surfaces::EyelidSphere lid;
+  lid.radius_mm = R_l;
+  lid.min_z_mm = z_f;
+  lid.max_z_mm = R_l;
+  lid.opening.opening = lids.opening;
+  lid.opening.upper_margin_mm = lids.upper_margin_mm;
+  lid.opening.lower_margin_mm = lids.lower_margin_mm;
+  lid.opening.closing_line_mm = lids.closing_line_mm;
+  lid.opening.half_width_mm = lids.half_width_mm;
   lid.opening.upper_turn = surfaces::MarginTurn::by(turns.upper_rad);
   lid.opening.lower_turn = surfaces::MarginTurn::by(turns.lower_rad);
   add(list, Surface::skin, index, world_from_head, lid);

@@ -325,26 +325,23 @@ inline Lane lane_of(const Ray& ray) {
 inline Hit hit_of(const Ray& ray, const Lane& lane) {
   Hit hit;
   if (!lane.found()) return hit;
+  hit.t = lane.t_hi;
+  hit.point = ray.origin + ray.direction * lane.t_hi;
   if (lane.mesh) {
     const PlacedMesh& mesh = *lane.mesh;
     hit.surface = mesh.kind();
     (mesh.kind() == Surface::mesh ? hit.mesh : hit.eye) = mesh.index();
     hit.triangle = static_cast<int>(lane.triangle);
-    hit.t = lane.t_hi;
-    hit.point = ray.origin + ray.direction * lane.t_hi;
     // Which side the ray meets is the triangle's; the shading normal may
     // lean past the ray at a silhouette.
     hit.front_face = dot(ray.direction, mesh.normal(lane.triangle)) < 0;
     hit.normal = mesh.shading_normal(lane.triangle, hit.point);
-    return hit;
   } else {
     hit.surface = lane.surface->kind();
     hit.eye = lane.surface->eye();
     hit.normal = lane.surface->world_normal(lane.local_point);
+    hit.front_face = dot(ray.direction, hit.normal) < 0;
   }
-  hit.t = lane.t_hi;
-  hit.point = ray.origin + ray.direction * lane.t_hi;
-  hit.front_face = dot(ray.direction, hit.normal) < 0;
   return hit;
 }
 

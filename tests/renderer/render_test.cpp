@@ -456,12 +456,16 @@ GlintCheck random_scenes_glints(bool face, std::uint64_t seed) {
   return total;
 }
 
+void record(const GlintCheck& check) {
+  ::testing::Test::RecordProperty("glints", check.glints);
+  ::testing::Test::RecordProperty("worst_glint_px", std::to_string(check.worst_px));
+  ::testing::Test::RecordProperty("worst_with_background_px", std::to_string(check.worst_with_background_px));
+}
+
 TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
   const GlintCheck check = random_scenes_glints(false, 20261122);
   EXPECT_GT(check.glints, 150);
-  RecordProperty("glints", check.glints);
-  RecordProperty("worst_glint_px", std::to_string(check.worst_px));
-  RecordProperty("worst_with_background_px", std::to_string(check.worst_with_background_px));
+  record(check);
 }
 
 // The same with faces: lids, margins and brows shade and hide glints, and
@@ -469,9 +473,7 @@ TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
 TEST(RenderGlints, RandomFaceScenesCentroidsMatchLabels) {
   const GlintCheck check = random_scenes_glints(true, 20261127);
   EXPECT_GT(check.glints, 120);
-  RecordProperty("glints", check.glints);
-  RecordProperty("worst_glint_px", std::to_string(check.worst_px));
-  RecordProperty("worst_with_background_px", std::to_string(check.worst_with_background_px));
+  record(check);
 }
 
 // ------------------------------------------------ pupil agrees with labels

@@ -28,11 +28,22 @@
 namespace purkinje::renderer {
 namespace {
 
+// A bundled scene by name; "<name>+face": that scene's eyes given a
+// periocular face with every default (the face's cost on the same view).
 const Scene& scene(const std::string& name) {
   static std::map<std::string, Scene> scenes;
   auto it = scenes.find(name);
   if (it == scenes.end()) {
-    it = scenes.emplace(name, load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json")).first;
+    const std::size_t plus = name.find("+face");
+    Scene s = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name.substr(0, plus) + ".json");
+    if (plus != std::string::npos) {
+      for (Eye& eye : s.eyes) {
+        EyeAppearance a = eye.appearance();
+        a.face = Face{};
+        eye.set_appearance(a);
+      }
+    }
+    it = scenes.emplace(name, std::move(s)).first;
   }
   return it->second;
 }
@@ -144,12 +155,23 @@ void sampling_args(benchmark::internal::Benchmark* b) {
 
 void BM_RenderRemote(benchmark::State& s) { render_scene(s, "remote", RenderMode::fast); }
 void BM_RenderHeadset(benchmark::State& s) { render_scene(s, "headset", RenderMode::fast); }
+void BM_RenderRemoteFace(benchmark::State& s) { render_scene(s, "remote+face", RenderMode::fast); }
+void BM_RenderHeadsetFace(benchmark::State& s) { render_scene(s, "headset+face", RenderMode::fast); }
 void BM_RenderRemotePairs(benchmark::State& s) { render_pairs(s, "remote"); }
 void BM_RenderHeadsetPairs(benchmark::State& s) { render_pairs(s, "headset"); }
+void BM_RenderRemoteFacePairs(benchmark::State& s) { render_pairs(s, "remote+face"); }
+void BM_RenderHeadsetFacePairs(benchmark::State& s) { render_pairs(s, "headset+face"); }
+// Both eyes in a 1280 x 960 view of the whole face.
+void BM_RenderRemoteBothEyesPairs(benchmark::State& s) { render_pairs(s, "remote_face"); }
 BENCHMARK(BM_RenderRemote)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadset)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemotePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadsetPairs)->Args({1, 10})->Args({1, 12})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemoteFace)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetFace)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemoteFacePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetFacePairs)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemoteBothEyesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 // The brute-force mode at the same settings, for the side-by-side table
 // (2^20 photons per light: its photon tracing is a fixed cost per image).
 // Only at 1 sample per pixel unless PURKINJE_BENCH_ERROR=1: CI's brief run

@@ -5,6 +5,7 @@
 #include "purkinje/models/dataset_spec.h"
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -55,10 +56,24 @@ struct ParameterRule {
   }
 };
 
+std::vector<ParameterRule> concatenated(std::initializer_list<std::vector<ParameterRule>> parts) {
+  std::vector<ParameterRule> all;
+  for (const std::vector<ParameterRule>& part : parts) all.insert(all.end(), part.begin(), part.end());
+  return all;
+}
+
 // The parameters every scene has, in the table's column order.
 const std::vector<ParameterRule>& scene_rules() {
   using T = ParameterType;
-  static const std::vector<ParameterRule> rules = {
+  // The face's keys but its midline, which the other eye's face shares.
+  const auto face_rules = [] {
+    std::vector<ParameterRule> face;
+    for (const FaceKey& key : kFaceKeys) {
+      if (key.name != "midline_mm") face.push_back({std::string(key.name), T::real, key.low, key.high});
+    }
+    return face;
+  };
+  static const std::vector<ParameterRule> rules = concatenated({std::vector<ParameterRule>{
       {"gaze_turn_deg", T::real, 0, 90},
       {"gaze_direction_deg", T::real, -360, 360},
       {"screen_x_mm", T::real, 0, 1e6},  // and within the screen (checked with the scene)
@@ -71,7 +86,8 @@ const std::vector<ParameterRule>& scene_rules() {
       {"head_pitch_deg", T::real, -90, 90},
       {"head_roll_deg", T::real, -90, 90},
       {"lid_opening", T::real, 0, 1},
-      {"blink", T::boolean},
+      {"blink", T::boolean}},
+      face_rules(), std::vector<ParameterRule>{
       {"iris_seed", T::integer, 0, kMaxExactInteger},
       {"iris_texture_contrast", T::real, 0, 1},
       {"iris_albedo", T::real, 0, 1},
@@ -90,8 +106,7 @@ const std::vector<ParameterRule>& scene_rules() {
       {"read_noise_e", T::real, 0, 1e6},
       {"noise", T::boolean},
       {"focus_distance_mm", T::real, 0, 1e6, true},
-      {"bits", T::integer, 0, 0, false, {8, 10, 12, 16}},
-  };
+      {"bits", T::integer, 0, 0, false, {8, 10, 12, 16}}}});
   return rules;
 }
 
@@ -430,6 +445,11 @@ struct Reader {
     for (const char* name : {"lid_opening", "blink", "skin_albedo"}) {
       if (given(name) && !lids) where.at(name).fail("", "the scene's first eye has no eyelids (scene-format.md: eyelids)");
     }
+    const bool face = scene.eyes.front().appearance().face.has_value();
+    for (const FaceKey& key : kFaceKeys) {
+      const std::string name(key.name);
+      if (given(name.c_str()) && !face) where.at(name).fail("", "the scene's first eye has no face (scene-format.md: face)");
+    }
     // A focus no nearer than the lens: the scene file's rule, for every
     // camera the set renders.
     if (given("focus_distance_mm")) {
@@ -681,6 +701,11 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (look.eyelids) {
     if (auto v = value("lid_opening")) look.eyelids->opening = *v;
     if (value("blink").value_or(0) != 0) look.eyelids->opening = 0;
+  }
+  if (look.face) {
+    for (const FaceKey& key : kFaceKeys) {
+      if (auto v = value(std::string(key.name))) look.face.value().*key.member = *v;
+    }
   }
   const double yaw = value("head_yaw_deg").value_or(0), pitch = value("head_pitch_deg").value_or(0),
                roll = value("head_roll_deg").value_or(0);

@@ -141,6 +141,12 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   look["head_forward"] = vector(a.head_forward);
   look["head_up"] = vector(a.head_up);
   look["lid_opening"] = a.eyelids ? number(a.eyelids->opening) : json(nullptr);
+  json face(nullptr);
+  if (a.face) {
+    face = {{"side", a.face->side == EyeSide::right ? "right" : "left"}};
+    for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = number(a.face.value().*key.member);
+  }
+  look["face"] = face;
   out["appearance"] = look;
   return out;
 }

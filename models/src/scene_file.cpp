@@ -468,15 +468,9 @@ EyeAppearance read_appearance(Object& e) {
       if (name != "right" && name != "left") side->fail("must be \"right\" or \"left\" (which eye of the face)");
       face.side = name == "right" ? EyeSide::right : EyeSide::left;
     }
-    // Bounds a face can have; beyond them the surface folds over itself or
-    // leaves the grid the renderer builds it on.
-    face.margin_thickness_mm = o.within_or("margin_thickness_mm", 0.5, 4, face.margin_thickness_mm);
-    face.crease_height_mm = o.within_or("crease_height_mm", 0, 15, face.crease_height_mm);
-    face.crease_depth_mm = o.within_or("crease_depth_mm", 0, 2, face.crease_depth_mm);
-    face.canthal_tilt_deg = o.within_or("canthal_tilt_deg", -15, 15, face.canthal_tilt_deg);
-    face.lateral_canthus_mm = o.within_or("lateral_canthus_mm", 5, 20, face.lateral_canthus_mm);
-    face.brow_prominence_mm = o.within_or("brow_prominence_mm", -8, 12, face.brow_prominence_mm);
-    face.midline_mm = o.within_or("midline_mm", 20, 45, face.midline_mm);
+    for (const FaceKey& key : kFaceKeys) {
+      face.*key.member = o.within_or(std::string(key.name), key.low, key.high, face.*key.member);
+    }
     o.finish();
     a.face = face;
   }
@@ -758,14 +752,9 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
                     {"lower_gain_downgaze", l.lower_gain_downgaze}};
     if (a.face) {
       const Face& f = *a.face;
-      o["face"] = {{"side", f.side == EyeSide::right ? "right" : "left"},
-                   {"margin_thickness_mm", f.margin_thickness_mm},
-                   {"crease_height_mm", f.crease_height_mm},
-                   {"crease_depth_mm", f.crease_depth_mm},
-                   {"canthal_tilt_deg", f.canthal_tilt_deg},
-                   {"lateral_canthus_mm", f.lateral_canthus_mm},
-                   {"brow_prominence_mm", f.brow_prominence_mm},
-                   {"midline_mm", f.midline_mm}};
+      ordered_json face = {{"side", f.side == EyeSide::right ? "right" : "left"}};
+      for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = f.*key.member;
+      o["face"] = face;
     }
     o["head"] = {{"forward", direction(a.head_forward)}, {"up", direction(a.head_up)}};
   }

@@ -137,18 +137,21 @@ def eye(
     kappa_deg: Optional[Mapping[str, float]] = None,
     appearance: Optional[Mapping[str, Any]] = None,
     eyelids: Optional[Mapping[str, float]] = None,
+    face: Optional[Mapping[str, Any]] = None,
     head: Optional[Mapping[str, Sequence[float]]] = None,
 ) -> dict:
     """An eye entry for build_scene ("Eyes"): a preset (`model`, see
     eye_model_presets()) with overrides, placed by `position`
     ({"cornea_center_mm": p} or {"rotation_center_mm": p}) and turned by
     `orientation` (yaw_deg/pitch_deg, optical_axis or gaze_target_mm;
-    default: looking along world -z)."""
+    default: looking along world -z). `eyelids` and `face` (with eyelids:
+    the periocular face in place of the lid sphere and wall) take the
+    scene format's keys."""
     return _entry(model=model, cornea=cornea, posterior_cornea=posterior_cornea, aqueous_index=aqueous_index,
                   iris=iris, pupil=pupil, rotation_center_depth_mm=rotation_center_depth_mm,
                   sclera_radius_mm=sclera_radius_mm, kappa_deg=kappa_deg, position=position,
                   orientation=orientation if orientation is not None else {}, appearance=appearance,
-                  eyelids=eyelids, head=head)
+                  eyelids=eyelids, face=face, head=head)
 
 
 def mesh(

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -295,6 +296,30 @@ TEST(DatasetSpec, BlinksCloseTheLidsAndMeshesSwitchOff) {
   EXPECT_EQ(spec.name, "g");  // the file's stem when no name is given
 }
 
+TEST(DatasetSpec, TheFaceParametersReachTheFirstEyesFaceOnly) {
+  const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/remote_face.json",
+      "count": 10, "parameters": {"margin_thickness_mm": {"uniform": [1, 2.5]},
+      "crease_height_mm": {"choice": [0, 9]}, "crease_depth_mm": {"uniform": [0.2, 1]},
+      "canthal_tilt_deg": {"uniform": [-5, 10]}, "lateral_canthus_mm": {"uniform": [9, 13]},
+      "brow_prominence_mm": {"normal": {"mean": 2, "sd": 3, "min": -8, "max": 12}}}})",
+                                              "f.json", kFolder);
+  for (std::uint64_t k : {0u, 5u}) {
+    const ImageDraw d = draw_image(spec, k);
+    const Scene s = scene_for_image(spec, d);
+    const Face& face = *s.eyes[0].appearance().face;
+    for (const char* name : {"margin_thickness_mm", "crease_height_mm", "crease_depth_mm", "canthal_tilt_deg",
+                             "lateral_canthus_mm", "brow_prominence_mm"}) {
+      const auto key = std::find_if(kFaceKeys.begin(), kFaceKeys.end(), [&](const FaceKey& f) { return f.name == name; });
+      ASSERT_NE(key, kFaceKeys.end()) << name;
+      EXPECT_EQ(face.*key->member, column(spec, d, name)) << name;
+    }
+    // The midline stays (the other eye's face shares it), and so does the
+    // other eye's face.
+    EXPECT_EQ(face.midline_mm, spec.scene.eyes[0].appearance().face->midline_mm);
+    EXPECT_EQ(s.eyes[1].appearance().face->crease_height_mm, spec.scene.eyes[1].appearance().face->crease_height_mm);
+  }
+}
+
 TEST(DatasetSpec, ADrawNoEyeCanHaveIsNamedWithItsImageAndValues) {
   // A pupil of 6 mm in an iris of 5.9: the anatomy rule, at image 0.
   const DatasetSpec spec = spec_with(R"("parameters": {"pupil_radius_mm": {"uniform": [5.95, 6]}})");
@@ -352,6 +377,9 @@ const Malformed kMalformed[] = {
     {R"("parameters": {"iris_seed": {"normal": {"mean": 5, "sd": 1}}})", "a normal draws real numbers; iris_seed takes integers"},
     {R"("parameters": {"bits": 9})", "parameters.bits = 9: must be one of 8, 10, 12, 16 (bits)"},
     {R"("parameters": {"lid_opening": 1.5})", "parameters.lid_opening = 1.5: must be in [0, 1] (lid_opening)"},
+    {R"("parameters": {"canthal_tilt_deg": {"uniform": [0, 20]}})", "parameters.canthal_tilt_deg.uniform[1] = 20: must be in [-15, 15] (canthal_tilt_deg)"},
+    {R"("parameters": {"crease_height_mm": 3})", "parameters.crease_height_mm: the scene's first eye has no face (scene-format.md: face)"},
+    {R"("parameters": {"midline_mm": 30})", "parameters.midline_mm = 30: unknown key"},
     {R"("parameters": {"iris_albedo": {"grid": {"from": 0.1, "to": 0.2, "steps": 0}}})", "parameters.iris_albedo.grid.steps = 0: must be in [1, 1000000]"},
     {R"("parameters": {"illuminators": {"led_middle": {"on": false}}})", "parameters.illuminators.led_middle = {...}: unknown key (valid keys here: led_left, led_right)"},
     {R"("parameters": {"illuminators": {"led_left": {"off": true}}})", "parameters.illuminators.led_left.off = true: unknown key (valid keys here: on, power_scale)"},

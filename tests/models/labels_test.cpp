@@ -141,6 +141,23 @@ TEST(Labels, JsonWritesNullWhereAStatusHasNoValue) {
   EXPECT_TRUE(pupil["unrefracted_center"]["u_px"].is_null());
 }
 
+TEST(Labels, TheEyesFaceIsWrittenAsTheSceneGivesIt) {
+  EXPECT_TRUE(json::parse(truth_to_json(two_light_scene(), hand_made_truth()))["eyes"][0]["appearance"]["face"].is_null());
+  const Scene scene = parse_scene(R"({ "format": 1, "name": "face",
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "illuminators": [ { "name": "a", "position_mm": [-100, 0, 0] }, { "name": "b", "position_mm": [100, 0, 0] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {}, "eyelids": {},
+                "face": { "side": "left", "canthal_tilt_deg": -3.5, "crease_height_mm": 0 } } ] })",
+                                  "face.json");
+  const json face = json::parse(truth_to_json(scene, hand_made_truth()))["eyes"][0]["appearance"]["face"];
+  EXPECT_EQ(face["side"], "left");
+  EXPECT_EQ(face["canthal_tilt_deg"].get<double>(), -3.5);
+  EXPECT_EQ(face["crease_height_mm"].get<double>(), 0);
+  EXPECT_EQ(face["midline_mm"].get<double>(), 31.5);  // the default
+  EXPECT_EQ(face.size(), 8u);
+}
+
 TEST(Labels, CsvHasOneRowPerFeatureAndEmptyCellsForMissingValues) {
   const std::string text = truth_to_csv(two_light_scene(), hand_made_truth());
   EXPECT_FALSE(mentions_non_finite(text)) << text;

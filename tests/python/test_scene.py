@@ -118,6 +118,14 @@ def test_keywords_build_the_scene_the_same_text_would():
     assert built.to_json() == purkinje.parse_scene(text).to_json()
 
 
+def test_a_face_is_a_keyword_as_in_the_file():
+    built = build_remote_like(eyelids={}, face={"side": "left", "canthal_tilt_deg": 6})
+    face = json.loads(built.to_json())["eyes"][0]["face"]
+    assert face["side"] == "left" and face["canthal_tilt_deg"] == 6 and face["crease_height_mm"] == 7
+    with pytest.raises(purkinje.SceneError, match=r"eyes\[0\].face = \{\}: only used with eyelids"):
+        build_remote_like(face={})
+
+
 def test_keywords_are_checked_with_the_file_formats_messages():
     with pytest.raises(purkinje.SceneError) as error:
         build_remote_like(cornea={"radius_mm": -7.8})

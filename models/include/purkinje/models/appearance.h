@@ -4,8 +4,10 @@
 // data; the renderer builds surfaces from it. Albedos are Lambertian
 // reflectances at about 850 nm.
 
+#include <array>
 #include <cstdint>
 #include <optional>
+#include <string_view>
 
 #include "purkinje/models/geometry.h"
 
@@ -93,6 +95,25 @@ struct Face {
   // interpupillary distance): the nose's ridge.
   double midline_mm = 31.5;
 };
+
+// Face's lengths and angles by their names in scene files and data sets,
+// with the bounds a face can have: beyond them its surface folds over
+// itself or leaves the grid the renderer builds it on.
+struct FaceKey {
+  std::string_view name;
+  double Face::*member;
+  double low;
+  double high;
+};
+inline constexpr std::array<FaceKey, 7> kFaceKeys{{
+    {"margin_thickness_mm", &Face::margin_thickness_mm, 0.5, 4},
+    {"crease_height_mm", &Face::crease_height_mm, 0, 15},
+    {"crease_depth_mm", &Face::crease_depth_mm, 0, 2},
+    {"canthal_tilt_deg", &Face::canthal_tilt_deg, -15, 15},
+    {"lateral_canthus_mm", &Face::lateral_canthus_mm, 5, 20},
+    {"brow_prominence_mm", &Face::brow_prominence_mm, -8, 12},
+    {"midline_mm", &Face::midline_mm, 20, 45},
+}};
 
 struct EyeAppearance {
   double iris_albedo = 0.25;           // mean of the textured iris

@@ -64,6 +64,10 @@ constexpr int kIrisRingAzimuths = 8;
 // this much of the ray's weight: what they gather is itself a few percent
 // of the image.
 constexpr double kGatherMinBranch = 1e-2;
+// Light bounced more than once (gather_hemisphere): the share of a gather
+// that diffuse surfaces send on is capped below 1, where a closed white
+// cavity's light would grow without bound.
+constexpr double kMaxOnwardShare = 0.95;
 
 // Nodes per side of the lights' iris caches (the option, or from the
 // iris's size in the image: a node every 2 px, odd, 9 to 33) and rings of
@@ -256,10 +260,18 @@ class FastIntegrator final : public PathIntegrator {
     for (std::size_t k = 0; k < lights_.size(); ++k) out.add(scaled_albedo * kInvPi * e[k], lights_[k]);
   }
 
-  // Irradiance at `point` (facing `normal`) from diffuse surfaces one
-  // bounce away, per light into `e`: `rays` cosine-distributed
-  // low-discrepancy directions, shifted by random numbers keyed by
-  // (stream, key).
+  // Irradiance at `point` (facing `normal`) from diffuse surfaces, per
+  // light added into `e`: `rays` cosine-distributed low-discrepancy
+  // directions, shifted by random numbers keyed by (stream, key), each
+  // ending in direct light (one bounce). Light bounced more than once is
+  // taken as a geometric series: the surfaces the rays met (their share
+  // S of the hemisphere, weighted by albedo / pi and Fresnel factors) get
+  // about the light this point gets, and pass on S of it, so the point's
+  // irradiance is E1 / (1 - S). Exact inside a closed diffuse sphere (the
+  // integrating sphere, S = rho); in a face's concave corners, where lids
+  // and canthi close round the eye, it recovers most of the 1-4% that one
+  // bounce misses (docs/rendering.md). It needs nothing but this point's
+  // own rays, so a region renders exactly as that part of the whole image.
   void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, std::uint64_t stream,
                          std::uint64_t key, double* e) const {
     const double shift_u = uniform01(seed_, stream, 2 * key), shift_v = uniform01(seed_, stream, 2 * key + 1);
@@ -267,6 +279,11 @@ class FastIntegrator final : public PathIntegrator {
   }
   void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, double shift_u, double shift_v,
                          double* e) const {
+    constexpr std::size_t kStackLights = 16;
+    std::array<double, kStackLights> stack{};
+    std::vector<double> heap(lights_.size() > kStackLights ? lights_.size() : 0, 0.0);
+    double* once = heap.empty() ? stack.data() : heap.data();
+    double onward = 0;
     Vector3 a = std::abs(normal.x) < 0.9 ? cross(normal, Vector3{1, 0, 0}) : cross(normal, Vector3{0, 1, 0});
     a = a * (1.0 / a.norm());
     const Vector3 b = cross(normal, a);
@@ -280,7 +297,7 @@ class FastIntegrator final : public PathIntegrator {
     int count = 0;
     const auto flush = [&] {
       tracer_.intersect(std::span<const Ray>(packet.data(), count), std::span<Hit>(hits.data(), count));
-      for (int j = 0; j < count; ++j) gather(packet[j], hits[j], 0, weight, kGatherMinBranch * weight, e);
+      for (int j = 0; j < count; ++j) gather(packet[j], hits[j], 0, weight, kGatherMinBranch * weight, once, onward);
       count = 0;
     };
     for (int i = 0; i < rays; ++i) {
@@ -293,6 +310,8 @@ class FastIntegrator final : public PathIntegrator {
       if (count == kPacket) flush();
     }
     if (count > 0) flush();
+    const double bounced = 1 / (1 - std::min(onward, kMaxOnwardShare));
+    for (std::size_t k = 0; k < lights_.size(); ++k) e[k] += once[k] * bounced;
   }
 
   // Lambertian surface lit directly by the point lights; `scaled_albedo`
@@ -494,20 +513,27 @@ class FastIntegrator final : public PathIntegrator {
     }
   }
 
-  // Radiance arriving along a ray leaving the iris, after one more
-  // diffuse reflection, times `weight`, per light into `e`.
-  void gather(const Ray& ray, int depth, double weight, double min_weight, double* e) const {
-    gather(ray, tracer_.intersect(ray), depth, weight, min_weight, e);
+  // Radiance arriving along a ray after one diffuse reflection, times
+  // `weight`, per light into `e`; the diffuse surface's share of the light
+  // it would pass on after more bounces (weight times albedo / pi) into
+  // `onward`.
+  void gather(const Ray& ray, int depth, double weight, double min_weight, double* e, double& onward) const {
+    gather(ray, tracer_.intersect(ray), depth, weight, min_weight, e, onward);
   }
   // The same, where the ray's first hit is known.
-  void gather(const Ray& ray, const Hit& hit, int depth, double weight, double min_weight, double* e) const {
+  void gather(const Ray& ray, const Hit& hit, int depth, double weight, double min_weight, double* e,
+              double& onward) const {
     const auto add = [&](std::size_t k, double radiance) { e[k] += radiance; };
     switch (scattering_of(hit.surface)) {
       case Scattering::diffuse:
-        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) direct_light(hit, weight * albedo, add);
+        if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
+          direct_light(hit, weight * albedo, add);
+          onward += weight * albedo * kInvPi;
+        }
         return;
       case Scattering::iris: {
         const double albedo = diffuse_albedo(scene_, hit);
+        onward += weight * albedo * kInvPi;
         for (std::size_t k = 0; k < lights_.size(); ++k) {
           add(k, weight * albedo * kInvPi * iris_[hit.eye][k].irradiance_w_m2(hit.point));
         }
@@ -518,10 +544,10 @@ class FastIntegrator final : public PathIntegrator {
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const double w_t = weight * (1 - c.reflectance) * c.eta * c.eta, w_r = weight * c.reflectance;
         if (c.transmitted && w_t > min_weight) {
-          gather({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w_t, min_weight, e);
+          gather({hit.point - c.facing * kRayOffsetMm, *c.transmitted}, depth + 1, w_t, min_weight, e, onward);
         }
         if (c.reflected && w_r > min_weight) {
-          gather({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_r, min_weight, e);
+          gather({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_r, min_weight, e, onward);
         }
         return;
       }

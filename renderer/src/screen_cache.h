@@ -4,9 +4,9 @@
 // over the image and interpolated between the nodes that see the same
 // surface close by. See docs/rendering.md.
 //
-// - DiffuseCache: light bounced once off other diffuse surfaces onto the
-//   skin, lids, sclera and meshes the camera sees (a few percent of the
-//   image, up to 10% in the creases around the eye).
+// - DiffuseCache: light bounced off other diffuse surfaces onto the skin,
+//   lids, sclera and meshes the camera sees (a few percent of the image,
+//   up to 10% in the creases around the eye), as the integrator gathers it.
 // - VisibilityCache: which lights a point sees (shadows); a point between
 //   nodes that agree takes their answer, elsewhere the shadow ray is traced.
 

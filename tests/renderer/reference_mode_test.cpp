@@ -175,7 +175,8 @@ PixelRegion around_lids(const Scene& scene, int camera_index) {
 }
 
 // Light bounced between lids, skin and sclera: the fast mode's diffuse
-// cache (one bounce) against the reference's paths (up to four bounces),
+// cache (one bounce and a geometric series for the rest) against the
+// reference's paths (up to four bounces),
 // mean radiance over the pixels both modes see wholly as skin, then as
 // sclera. Without the cache the fast mode is about 2% too dark on both
 // here, in both scenes.

@@ -185,6 +185,79 @@ TEST(RenderRadiometry, LambertianMeshMatchesClosedForm) {
   EXPECT_EQ(render(scene, 0, options).radiance.at(320, 240), 0.0f);
 }
 
+// Light bounced again and again: inside a closed diffuse sphere of albedo
+// rho with a point light at its centre, light that has bounced at least
+// once is spread evenly over the wall (every patch sees every other with
+// the same form factor, dA / (4 pi R^2)), summing to an irradiance
+// rho / (1 - rho) times the mean direct one, 4 pi I / A. A camera sees a
+// patch of the wall; light bounced off the rest reaches it all the same.
+// One bounce alone would give rho instead of rho / (1 - rho): at
+// rho = 0.5, 25% too dark.
+TEST(RenderRadiometry, InsideADiffuseSphereLightBouncesAsTheIntegratingSphereSays) {
+  Scene scene = bundled("remote");
+  Sensor sensor = scene.cameras[0].sensor();
+  sensor.noise = false;
+  sensor.psf_sigma_px = 0;
+  scene.cameras[0] = with_sensor(scene.cameras[0], sensor);
+  scene.eyes.clear();
+  Illuminator led;
+  led.name = "led";
+  led.position = scene.cameras[0].center();
+  led.radiant_intensity_w_sr = 0.3;
+  scene.illuminators = {led};
+  // A UV sphere of radius 100 mm about the camera, 256 x 128 facets.
+  constexpr double R = 100, rho = 0.5;
+  constexpr int kSegments = 256, kRings = 128;
+  Mesh sphere;
+  sphere.name = "sphere";
+  sphere.albedo = rho;
+  for (int r = 0; r <= kRings; ++r) {
+    const double polar = std::numbers::pi * r / kRings;
+    for (int k = 0; k < kSegments; ++k) {
+      const double azimuth = 2 * std::numbers::pi * k / kSegments;
+      sphere.vertices.push_back(led.position + Vector3{R * std::sin(polar) * std::cos(azimuth),
+                                                       R * std::sin(polar) * std::sin(azimuth), R * std::cos(polar)});
+    }
+  }
+  const auto vertex = [&](int r, int k) { return static_cast<unsigned>(r * kSegments + (k % kSegments)); };
+  double area = 0;
+  for (int r = 0; r < kRings; ++r) {
+    for (int k = 0; k < kSegments; ++k) {
+      for (const std::array<unsigned, 3> t : {std::array{vertex(r, k), vertex(r + 1, k), vertex(r + 1, k + 1)},
+                                              std::array{vertex(r, k), vertex(r + 1, k + 1), vertex(r, k + 1)}}) {
+        const Vector3 a = sphere.vertices[t[1]] - sphere.vertices[t[0]], b = sphere.vertices[t[2]] - sphere.vertices[t[0]];
+        if (cross(a, b).norm() == 0) continue;  // at the poles
+        sphere.triangles.push_back(t);
+        area += 0.5 * cross(a, b).norm();
+      }
+    }
+  }
+  scene.meshes = {sphere};
+  RenderOptions options;
+  options.samples_per_pixel = 1;  // through each pixel's centre, which the AOVs describe
+  options.edge_samples_per_pixel = 0;
+  options.region = PixelRegion{280, 200, 360, 280};
+  const RenderResult r = render(scene, 0, options);
+
+  const double bounced = rho / (1 - rho) * 4 * std::numbers::pi * led.radiant_intensity_w_sr / area;  // W/mm^2
+  const Camera& camera = scene.cameras[0];
+  const UnitVector3 axis = camera.world_from_camera().rotation() * UnitVector3::unit_z();
+  double worst = 0;
+  for (int y = 200; y < 280; y += 4) {
+    for (int x = 280; x < 360; x += 4) {
+      const UnitVector3 dir = camera.back_project({double(x), double(y)});
+      const Point3 p = camera.center() + dir * (aov(r, "depth").at(x, y) / dot(dir, axis));
+      const Vector3 n{aov(r, "N.x").at(x, y), aov(r, "N.y").at(x, y), aov(r, "N.z").at(x, y)};
+      const Vector3 to = led.position - p;
+      const double direct = led.radiant_intensity_w_sr * std::abs(dot(n, to)) / (n.norm() * to.norm() * to.squared_norm());
+      const double expected = rho / std::numbers::pi * (direct + bounced) * 1e6;  // W m^-2 sr^-1
+      worst = std::max(worst, std::abs(r.radiance.at(x, y) / expected - 1));
+    }
+  }
+  EXPECT_LT(worst, 0.01);
+  RecordProperty("worst_relative_error", std::to_string(worst));
+}
+
 // A mesh appears in the cornea's mirror image: behind the camera, a lit
 // plane adds R_F L to the corneal apex's pixel, R_F the Fresnel
 // reflectance at normal incidence, L the plane's radiance where the

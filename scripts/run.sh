@@ -12,7 +12,7 @@ bash scripts/install-deps.sh
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build/release --target purkinje purkinje_python_package
 
-for scene in remote headset; do
+for scene in remote headset remote_face; do
   mkdir -p "out/$scene"
   build/release/tools/purkinje render "assets/scenes/$scene.json" -o "out/$scene"
   build/release/tools/purkinje truth "assets/scenes/$scene.json" -o "out/$scene/labels.json"
@@ -25,7 +25,7 @@ done
 echo
 echo "Images and labels written (open the .png files in any viewer; the .exr"
 echo "files hold float radiance and AOVs; docs/rendering.md explains them):"
-ls -l out/remote out/headset
+ls -l out/remote out/headset out/remote_face
 echo
 echo "Labelled sets (docs/datasets.md): out/remote_set, out/headset_set, each with table.csv"
 echo

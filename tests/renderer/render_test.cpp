@@ -605,7 +605,8 @@ TEST(RenderPupil, SegmentationEllipseCentreMatchesLabel) {
   for (const char* name : {"remote", "headset"}) {
     Scene scene = bundled(name);
     open_eyelids(scene);
-    const PupilTruth& pupil = compute_truth(scene).views[0].pupil;
+    const SceneTruth truth = compute_truth(scene);
+    const PupilTruth& pupil = truth.views[0].pupil;
     ASSERT_TRUE(pupil.ellipse_valid) << name;
     const RenderedPupil rendered = render_pupil(scene, pupil);
     ASSERT_GE(rendered.crossings, 20) << name;
@@ -637,7 +638,8 @@ TEST(RenderPupil, RandomFaceScenesCentresAndOcclusionFlagsMatchTheImage) {
     // region is rendered.
     const Scene scene = random_scene(i, true, rng, false);
     const Camera& camera = scene.cameras[0];
-    const PupilTruth& geometric = compute_truth(scene).views[0].pupil;
+    const SceneTruth truth = compute_truth(scene);
+    const PupilTruth& geometric = truth.views[0].pupil;
     if (!geometric.ellipse_valid) continue;
     const Ellipse& e = geometric.ellipse;
     const double r = e.semi_axis_1_px + e.semi_axis_2_px;

@@ -31,6 +31,8 @@ def main():
 
     scene = purkinje.load_scene(args.scene)
     if args.face:
+        if len(scene.eyes) != 1:
+            parser.error("--face gives one eye a right-side face: the scene must have one eye")
         d = json.loads(scene.to_json())
         for eye in d["eyes"]:
             eye["face"] = {}

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <utility>
@@ -28,7 +29,7 @@
 namespace purkinje::renderer {
 namespace {
 
-// A bundled scene by name; "<name>+face": that scene's eyes given a
+// A bundled scene by name; "<name>+face": that scene's one eye given a
 // periocular face with every default (the face's cost on the same view).
 const Scene& scene(const std::string& name) {
   static std::map<std::string, Scene> scenes;
@@ -37,6 +38,7 @@ const Scene& scene(const std::string& name) {
     const std::size_t plus = name.find("+face");
     Scene s = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name.substr(0, plus) + ".json");
     if (plus != std::string::npos) {
+      if (s.eyes.size() != 1) throw std::invalid_argument(name + ": a default face is a right eye's; one eye only");
       for (Eye& eye : s.eyes) {
         EyeAppearance a = eye.appearance();
         a.face = Face{};

@@ -65,11 +65,12 @@ std::vector<ParameterRule> concatenated(std::initializer_list<std::vector<Parame
 // The parameters every scene has, in the table's column order.
 const std::vector<ParameterRule>& scene_rules() {
   using T = ParameterType;
-  // The face's keys but its midline, which the other eye's face shares.
+  // The face's keys but those the other eye's face shares (its midline):
+  // a data set varies the first eye.
   const auto face_rules = [] {
     std::vector<ParameterRule> face;
     for (const FaceKey& key : kFaceKeys) {
-      if (key.name != "midline_mm") face.push_back({std::string(key.name), T::real, key.low, key.high});
+      if (!key.shared) face.push_back({std::string(key.name), T::real, key.low, key.high});
     }
     return face;
   };

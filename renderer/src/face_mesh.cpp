@@ -16,9 +16,10 @@ constexpr double kForeheadMm = 60.0;       // its top, above the centre of rotat
 constexpr double kChinwardMm = 55.0;       // its bottom, below it
 constexpr double kSocketSlope = 2.5;       // the socket's floor past the globe, mm per mm
 // Columns across the fissure and rows over the lids. Flat triangles of
-// 0.25 x 0.25 mm stray at most 1e-3 mm from the lid's sphere (circumradius
-// squared over its diameter), well under a pixel of the headset (0.08 mm)
-// or the remote (0.2 mm). Columns no wider: where the globe is steep seen
+// 0.25 x 0.25 mm as seen along -z stray about 1e-3 mm from the lid's
+// sphere (circumradius squared over its diameter; 2e-3 mm where the lid
+// slopes steeply away), far under a pixel of the headset (0.08 mm) or the
+// remote (0.2 mm). Columns no wider: where the globe is steep seen
 // along -z (near its silhouette) a chord of the closed lids' feet would dip
 // below the 0.02 mm they stand in front of the eye (0.5 mm columns do).
 // Rows half as far apart changed the remote face's image by at most 25 DN

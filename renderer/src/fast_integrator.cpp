@@ -69,6 +69,19 @@ constexpr double kGatherMinBranch = 1e-2;
 // cavity's light would grow without bound.
 constexpr double kMaxOnwardShare = 0.95;
 
+// One number per light, zeroed: on the stack for the usual few lights
+// (these live per pixel and per gathered point), on the heap beyond.
+class PerLight {
+ public:
+  explicit PerLight(std::size_t lights) : heap_(lights > kStack ? lights : 0, 0.0) {}
+  double* data() { return heap_.empty() ? stack_.data() : heap_.data(); }
+
+ private:
+  static constexpr std::size_t kStack = 16;
+  std::array<double, kStack> stack_{};
+  std::vector<double> heap_;
+};
+
 // Nodes per side of the lights' iris caches (the option, or from the
 // iris's size in the image: a node every 2 px, odd, 9 to 33) and rings of
 // the indirect light's (a pixel apart at the rim, 9 to 25). Finer than the
@@ -111,10 +124,15 @@ class FastIntegrator final : public PathIntegrator {
     }
     iris_.resize(scene.eyes.size());
     for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
-      const IrisGridSizes sizes = iris_grid_sizes(camera, scene.eyes[e], options);
       for (const Light& l : lights_) {
-        iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr, sizes.direct, visible);
+        iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr,
+                              iris_grid_sizes(camera, scene.eyes[e], options).direct, visible);
       }
+    }
+    // Every eye's caches first: an iris's gathered rays may reach another
+    // eye's iris.
+    for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+      const IrisGridSizes sizes = iris_grid_sizes(camera, scene.eyes[e], options);
       build_iris_indirect(static_cast<int>(e), sizes.rings);
       build_iris_light(static_cast<int>(e), sizes.direct);
     }
@@ -249,10 +267,8 @@ class FastIntegrator final : public PathIntegrator {
   // cache node serves the point.
   void interreflection(const DiffusePoint& p, double scaled_albedo, const Primary& primary,
                        Contribution& out) const {
-    constexpr std::size_t kStackLights = 16;
-    std::array<double, kStackLights> stack;  // written by the cache or the gather
-    std::vector<double> heap(lights_.size() > kStackLights ? lights_.size() : 0);
-    double* e = heap.empty() ? stack.data() : heap.data();
+    PerLight scratch(lights_.size());  // written by the cache or the gather
+    double* e = scratch.data();
     if (!diffuse_->irradiance(primary.image_position, p, e)) {
       std::fill(e, e + lights_.size(), 0.0);
       gather_hemisphere(p.point, p.normal, kDiffuseMissRays, kCacheMissStream, primary.path, e);
@@ -279,10 +295,8 @@ class FastIntegrator final : public PathIntegrator {
   }
   void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, double shift_u, double shift_v,
                          double* e) const {
-    constexpr std::size_t kStackLights = 16;
-    std::array<double, kStackLights> stack{};
-    std::vector<double> heap(lights_.size() > kStackLights ? lights_.size() : 0, 0.0);
-    double* once = heap.empty() ? stack.data() : heap.data();
+    PerLight scratch(lights_.size());
+    double* once = scratch.data();
     double onward = 0;
     Vector3 a = std::abs(normal.x) < 0.9 ? cross(normal, Vector3{1, 0, 0}) : cross(normal, Vector3{0, 1, 0});
     a = a * (1.0 / a.norm());

@@ -99,11 +99,13 @@ struct Face {
 // Face's lengths and angles by their names in scene files and data sets,
 // with the bounds a face can have: beyond them its surface folds over
 // itself or leaves the grid the renderer builds it on.
+// `shared`: both eyes' faces must agree on it (they meet there).
 struct FaceKey {
   std::string_view name;
   double Face::*member;
   double low;
   double high;
+  bool shared = false;
 };
 inline constexpr std::array<FaceKey, 7> kFaceKeys{{
     {"margin_thickness_mm", &Face::margin_thickness_mm, 0.5, 4},
@@ -112,7 +114,7 @@ inline constexpr std::array<FaceKey, 7> kFaceKeys{{
     {"canthal_tilt_deg", &Face::canthal_tilt_deg, -15, 15},
     {"lateral_canthus_mm", &Face::lateral_canthus_mm, 5, 20},
     {"brow_prominence_mm", &Face::brow_prominence_mm, -8, 12},
-    {"midline_mm", &Face::midline_mm, 20, 45},
+    {"midline_mm", &Face::midline_mm, 20, 45, true},
 }};
 
 struct EyeAppearance {

@@ -143,7 +143,7 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   look["lid_opening"] = a.eyelids ? number(a.eyelids->opening) : json(nullptr);
   json face(nullptr);
   if (a.face) {
-    face = {{"side", a.face->side == EyeSide::right ? "right" : "left"}};
+    face = {{"side", to_string(a.face->side)}};
     for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = number(a.face.value().*key.member);
   }
   look["face"] = face;

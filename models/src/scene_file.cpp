@@ -465,8 +465,10 @@ EyeAppearance read_appearance(Object& e) {
     Face face;
     if (auto side = o.optional("side")) {
       const std::string name = side->as_string();
-      if (name != "right" && name != "left") side->fail("must be \"right\" or \"left\" (which eye of the face)");
-      face.side = name == "right" ? EyeSide::right : EyeSide::left;
+      if (name != to_string(EyeSide::right) && name != to_string(EyeSide::left)) {
+        side->fail("must be \"right\" or \"left\" (which eye of the face)");
+      }
+      face.side = name == to_string(EyeSide::right) ? EyeSide::right : EyeSide::left;
     }
     for (const FaceKey& key : kFaceKeys) {
       face.*key.member = o.within_or(std::string(key.name), key.low, key.high, face.*key.member);
@@ -752,7 +754,7 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
                     {"lower_gain_downgaze", l.lower_gain_downgaze}};
     if (a.face) {
       const Face& f = *a.face;
-      ordered_json face = {{"side", f.side == EyeSide::right ? "right" : "left"}};
+      ordered_json face = {{"side", to_string(f.side)}};
       for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = f.*key.member;
       o["face"] = face;
     }

@@ -63,6 +63,8 @@ struct Eyelids {
 
 // Which of a face's eyes this is: it sets which side the nose is on.
 enum class EyeSide { right, left };
+// As scene files and labels spell it.
+constexpr const char* to_string(EyeSide side) { return side == EyeSide::right ? "right" : "left"; }
 
 // The periocular region as a face (docs/scene-format.md: face): in place
 // of the lid sphere and the flat wall, the renderer builds a skin surface

@@ -133,15 +133,22 @@ Mesh square(const Point3& center, const UnitVector3& normal, double half, double
   return m;
 }
 
-// A mesh is Lambertian like the skin: a plane of albedo rho facing a
-// light of intensity I at distance d has radiance rho I cos(theta) / (pi d^2).
-TEST(RenderRadiometry, LambertianMeshMatchesClosedForm) {
+// The remote scene's camera, noise-free and unblurred, with no eye: for
+// closed forms on meshes.
+Scene remote_camera_alone() {
   Scene scene = bundled("remote");
   Sensor sensor = scene.cameras[0].sensor();
   sensor.noise = false;
   sensor.psf_sigma_px = 0;
   scene.cameras[0] = with_sensor(scene.cameras[0], sensor);
   scene.eyes.clear();
+  return scene;
+}
+
+// A mesh is Lambertian like the skin: a plane of albedo rho facing a
+// light of intensity I at distance d has radiance rho I cos(theta) / (pi d^2).
+TEST(RenderRadiometry, LambertianMeshMatchesClosedForm) {
+  Scene scene = remote_camera_alone();
   Illuminator led;
   led.name = "led";
   led.position = {0, 0, 100};
@@ -189,12 +196,7 @@ TEST(RenderRadiometry, LambertianMeshMatchesClosedForm) {
 // the light `offset` from its centre (the camera's position), against the
 // closed form.
 double integrating_sphere_worst_error(double rho, const Vector3& offset) {
-  Scene scene = bundled("remote");
-  Sensor sensor = scene.cameras[0].sensor();
-  sensor.noise = false;
-  sensor.psf_sigma_px = 0;
-  scene.cameras[0] = with_sensor(scene.cameras[0], sensor);
-  scene.eyes.clear();
+  Scene scene = remote_camera_alone();
   const Point3 center = scene.cameras[0].center();
   Illuminator led;
   led.name = "led";

@@ -30,18 +30,21 @@ namespace purkinje::renderer {
 namespace {
 
 // A bundled scene by name; "<name>+face": that scene's one eye given a
-// periocular face with every default (the face's cost on the same view).
+// periocular face with every default (the face's cost on the same view);
+// "<name>+face+lashes": and default lashes.
 const Scene& scene(const std::string& name) {
   static std::map<std::string, Scene> scenes;
   auto it = scenes.find(name);
   if (it == scenes.end()) {
     const std::size_t plus = name.find("+face");
+    const bool lashes = name.ends_with("+lashes");
     Scene s = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name.substr(0, plus) + ".json");
     if (plus != std::string::npos) {
       if (s.eyes.size() != 1) throw std::invalid_argument(name + ": a default face is a right eye's; one eye only");
       for (Eye& eye : s.eyes) {
         EyeAppearance a = eye.appearance();
         a.face = Face{};
+        if (lashes) a.face->lashes = Lashes{};
         eye.set_appearance(a);
       }
     }
@@ -163,6 +166,10 @@ void BM_RenderRemotePairs(benchmark::State& s) { render_pairs(s, "remote"); }
 void BM_RenderHeadsetPairs(benchmark::State& s) { render_pairs(s, "headset"); }
 void BM_RenderRemoteFacePairs(benchmark::State& s) { render_pairs(s, "remote+face"); }
 void BM_RenderHeadsetFacePairs(benchmark::State& s) { render_pairs(s, "headset+face"); }
+void BM_RenderRemoteFaceLashes(benchmark::State& s) { render_scene(s, "remote+face+lashes", RenderMode::fast); }
+void BM_RenderHeadsetFaceLashes(benchmark::State& s) { render_scene(s, "headset+face+lashes", RenderMode::fast); }
+void BM_RenderRemoteFaceLashesPairs(benchmark::State& s) { render_pairs(s, "remote+face+lashes"); }
+void BM_RenderHeadsetFaceLashesPairs(benchmark::State& s) { render_pairs(s, "headset+face+lashes"); }
 // Both eyes in a 1280 x 960 view of the whole face.
 void BM_RenderRemoteBothEyesPairs(benchmark::State& s) { render_pairs(s, "remote_face"); }
 BENCHMARK(BM_RenderRemote)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -173,6 +180,10 @@ BENCHMARK(BM_RenderRemoteFace)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMi
 BENCHMARK(BM_RenderHeadsetFace)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteFacePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadsetFacePairs)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemoteFaceLashes)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetFaceLashes)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemoteFaceLashesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetFaceLashesPairs)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteBothEyesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 // The brute-force mode at the same settings, for the side-by-side table
 // (2^20 photons per light: its photon tracing is a fixed cost per image).

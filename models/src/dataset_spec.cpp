@@ -74,6 +74,12 @@ const std::vector<ParameterRule>& scene_rules() {
     }
     return face;
   };
+  const auto lash_rules = [] {
+    std::vector<ParameterRule> lashes;
+    for (const LashKey& key : kLashKeys) lashes.push_back({"lash_" + std::string(key.name), T::real, key.low, key.high});
+    lashes.push_back({"lash_seed", T::integer, 0, kMaxExactInteger});
+    return lashes;
+  };
   static const std::vector<ParameterRule> rules = concatenated({std::vector<ParameterRule>{
       {"gaze_turn_deg", T::real, 0, 90},
       {"gaze_direction_deg", T::real, -360, 360},
@@ -88,7 +94,7 @@ const std::vector<ParameterRule>& scene_rules() {
       {"head_roll_deg", T::real, -90, 90},
       {"lid_opening", T::real, 0, 1},
       {"blink", T::boolean}},
-      face_rules(), std::vector<ParameterRule>{
+      face_rules(), lash_rules(), std::vector<ParameterRule>{
       {"iris_seed", T::integer, 0, kMaxExactInteger},
       {"iris_texture_contrast", T::real, 0, 1},
       {"iris_albedo", T::real, 0, 1},
@@ -451,6 +457,12 @@ struct Reader {
       const std::string name(key.name);
       if (given(name.c_str()) && !face) where.at(name).fail("", "the scene's first eye has no face (scene-format.md: face)");
     }
+    const bool lashes = face && scene.eyes.front().appearance().face->lashes.has_value();
+    for (const ParameterRule& rule : scene_rules()) {
+      if (rule.name.starts_with("lash_") && given(rule.name.c_str()) && !lashes) {
+        where.at(rule.name).fail("", "the scene's first eye has no lashes (scene-format.md: lashes)");
+      }
+    }
     // A focus no nearer than the lens: the scene file's rule, for every
     // camera the set renders.
     if (given("focus_distance_mm")) {
@@ -706,6 +718,13 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (look.face) {
     for (const FaceKey& key : kFaceKeys) {
       if (auto v = value(std::string(key.name))) look.face.value().*key.member = *v;
+    }
+    if (look.face->lashes) {
+      Lashes& lashes = *look.face->lashes;
+      for (const LashKey& key : kLashKeys) {
+        if (auto v = value("lash_" + std::string(key.name))) lashes.*key.member = *v;
+      }
+      if (auto v = value("lash_seed")) lashes.seed = static_cast<std::uint64_t>(*v);
     }
   }
   const double yaw = value("head_yaw_deg").value_or(0), pitch = value("head_pitch_deg").value_or(0),

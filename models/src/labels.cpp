@@ -145,6 +145,13 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   if (a.face) {
     face = {{"side", to_string(a.face->side)}};
     for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = number(a.face.value().*key.member);
+    json lashes(nullptr);
+    if (a.face->lashes) {
+      lashes = json::object();
+      for (const LashKey& key : kLashKeys) lashes[std::string(key.name)] = number(a.face->lashes.value().*key.member);
+      lashes["seed"] = a.face->lashes->seed;
+    }
+    face["lashes"] = lashes;
   }
   look["face"] = face;
   out["appearance"] = look;
@@ -158,6 +165,7 @@ json glint_json(const GlintTruth& g, const Scene& scene, const Camera& camera) {
   out["illuminator"] = g.illuminator;
   out["illuminator_name"] = scene.illuminators.at(g.illuminator).name;
   out["status"] = to_string(g.status);
+  if (g.status == PathStatus::occluded) out["occluded_by"] = to_string(g.occluder);
   pixel_fields(out, has_path && pixel_valid(g.status, camera, r.point), g.pixel);
   const json null;
   out["point_mm"] = has_path ? point(r.point) : null;
@@ -200,6 +208,7 @@ json pupil_json(const PupilTruth& p, const Camera& camera) {
     point_out["index"] = i;
     point_out["angle_deg"] = degrees(b.angle_rad);
     point_out["status"] = to_string(b.status);
+    if (b.status == PathStatus::occluded) point_out["occluded_by"] = to_string(b.occluder);
     pixel_fields(point_out,
                  path_valid(b.refraction.status) &&
                      pixel_valid(b.status, camera, b.refraction.anterior_point),

@@ -473,6 +473,16 @@ EyeAppearance read_appearance(Object& e) {
     for (const FaceKey& key : kFaceKeys) {
       face.*key.member = o.within_or(std::string(key.name), key.low, key.high, face.*key.member);
     }
+    if (auto lashes_value = o.optional("lashes")) {
+      Object l(*lashes_value);
+      Lashes lashes;
+      for (const LashKey& key : kLashKeys) {
+        lashes.*key.member = l.within_or(std::string(key.name), key.low, key.high, lashes.*key.member);
+      }
+      if (auto seed = l.optional("seed")) lashes.seed = seed->as_exact_count();
+      l.finish();
+      face.lashes = lashes;
+    }
     o.finish();
     a.face = face;
   }
@@ -756,6 +766,12 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
       const Face& f = *a.face;
       ordered_json face = {{"side", to_string(f.side)}};
       for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = f.*key.member;
+      if (f.lashes) {
+        ordered_json lashes;
+        for (const LashKey& key : kLashKeys) lashes[std::string(key.name)] = f.lashes.value().*key.member;
+        lashes["seed"] = f.lashes->seed;
+        face["lashes"] = lashes;
+      }
       o["face"] = face;
     }
     o["head"] = {{"forward", direction(a.head_forward)}, {"up", direction(a.head_up)}};

@@ -25,6 +25,17 @@ PathStatus image_of(PathStatus path, const Point3& point, const Camera& camera, 
 
 }  // namespace
 
+const char* to_string(Occluder o) {
+  switch (o) {
+    case Occluder::none: return "none";
+    case Occluder::skin: return "skin";
+    case Occluder::lash: return "lash";
+    case Occluder::mesh: return "mesh";
+    case Occluder::eye: return "eye";
+  }
+  return "unknown";
+}
+
 RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
   RefractedImage out;
   out.path = solve_refraction(eye, inner, camera.center());
@@ -57,10 +68,10 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         g.illuminator = l;
         g.reflection = solve_reflection(eye, scene.illuminators[l].position, camera.center());
         g.status = image_of(g.reflection.status, g.reflection.point, camera, g.pixel);
-        if (g.status == PathStatus::ok && options.occluded &&
-            (options.occluded(scene.illuminators[l].position, g.reflection.point) ||
-             options.occluded(g.reflection.point, camera.center()))) {
-          g.status = PathStatus::occluded;
+        if (g.status == PathStatus::ok && options.occluded) {
+          g.occluder = options.occluded(g.reflection.point, camera.center());
+          if (g.occluder == Occluder::none) g.occluder = options.occluded(g.reflection.point, scene.illuminators[l].position);
+          if (g.occluder != Occluder::none) g.status = PathStatus::occluded;
         }
         view.glints.push_back(g);
       }
@@ -75,7 +86,8 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         b.refraction = img.path;
         if (b.status == PathStatus::ok) {
           ok_pixels.push_back(b.pixel);
-          if (options.occluded && options.occluded(b.refraction.anterior_point, camera.center())) {
+          if (options.occluded) b.occluder = options.occluded(b.refraction.anterior_point, camera.center());
+          if (b.occluder != Occluder::none) {
             b.status = PathStatus::occluded;
           } else {
             visible_pixels.push_back(b.pixel);
@@ -98,7 +110,7 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
       const RefractedImage centre = image_through_cornea(eye, camera, eye.pupil_center());
       view.pupil.refracted_center_status = centre.status;
       if (centre.status == PathStatus::ok && options.occluded &&
-          options.occluded(centre.path.anterior_point, camera.center())) {
+          options.occluded(centre.path.anterior_point, camera.center()) != Occluder::none) {
         view.pupil.refracted_center_status = PathStatus::occluded;
       }
       view.pupil.refracted_center = centre.pixel;

@@ -88,6 +88,8 @@ class GlintLabel:
     reflected: Optional[np.ndarray]
     incidence_deg: Optional[float]
     on_cap: Optional[bool]
+    #: For status "occluded": "skin", "lash", "mesh" or "eye" (what the camera sees in front, else what shadows it).
+    occluded_by: Optional[str] = None
 
     @property
     def pixel_px(self) -> Optional[np.ndarray]:
@@ -98,7 +100,7 @@ class GlintLabel:
     def _from(cls, d: Dict[str, Any]) -> "GlintLabel":
         return cls(d["illuminator"], d["illuminator_name"], d["status"], d["u_px"], d["v_px"],
                    _vector(d["point_mm"]), _vector(d["normal"]), _vector(d["incident"]), _vector(d["reflected"]),
-                   d["incidence_deg"], d["on_cap"])
+                   d["incidence_deg"], d["on_cap"], d.get("occluded_by"))
 
 
 @dataclass(frozen=True)
@@ -118,6 +120,8 @@ class RefractedPoint:
     inner_direction: Optional[np.ndarray]
     outer_direction: Optional[np.ndarray]
     on_cap: Optional[bool]
+    #: For status "occluded": "skin", "lash", "mesh" or "eye" (what the camera sees in front of it).
+    occluded_by: Optional[str] = None
 
     @property
     def pixel_px(self) -> Optional[np.ndarray]:
@@ -129,7 +133,8 @@ class RefractedPoint:
         return cls(d.get("index"), d.get("angle_deg"), d["status"], d["u_px"], d["v_px"],
                    _vector(d.get("border_point_mm")), _vector(d.get("cornea_point_mm")),
                    _vector(d.get("posterior_point_mm")), _vector(d.get("cornea_normal")),
-                   _vector(d.get("inner_direction")), _vector(d.get("outer_direction")), d.get("on_cap"))
+                   _vector(d.get("inner_direction")), _vector(d.get("outer_direction")), d.get("on_cap"),
+                   d.get("occluded_by"))
 
 
 @dataclass(frozen=True)

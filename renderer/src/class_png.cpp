@@ -1,5 +1,5 @@
 // Segmentation images as indexed PNG through libpng: OpenImageIO writes no
-// palette PNG, and an 8-bit grey image of the classes 0..4 shows black in
+// palette PNG, and an 8-bit grey image of the classes 0..5 shows black in
 // every viewer. The project's one libpng adapter.
 
 #include <png.h>
@@ -17,14 +17,15 @@
 namespace purkinje::renderer {
 namespace {
 
-constexpr int kClassCount = 5;
-// background, skin, sclera, iris, pupil: distinct at a glance.
+constexpr int kClassCount = 6;
+// background, skin, sclera, iris, pupil, lash: distinct at a glance.
 constexpr std::array<png_color, kClassCount> kPalette = {{
     {0, 0, 0},
     {222, 170, 135},
     {240, 240, 240},
     {60, 110, 200},
     {200, 30, 60},
+    {250, 200, 0},
 }};
 
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& reason) {

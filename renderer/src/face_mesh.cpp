@@ -273,6 +273,25 @@ FaceMesh build_face_mesh(const Eye& eye, const Pose& world_from_head, const surf
     const auto n = UnitVector3::try_normalize(s);
     mesh.normals.push_back(n ? *n : forward);
   }
+
+  // The margins' anterior edges: row kMarginRows of each lid lies at
+  // d = kMarginWidthMm, where the margin's quarter ellipse meets the skin.
+  const auto edge = [&](std::size_t row, std::size_t next_row) {
+    MarginEdge e;
+    for (std::size_t k = 0; k < column_count; ++k) {
+      // Lateral to medial: along +x for a right eye, -x for a left one.
+      const std::size_t c = nasal > 0 ? k : column_count - 1 - k;
+      const double u = fissure_coordinate(lids, face, columns[c]);
+      if (!(std::abs(u) < 1)) continue;
+      e.points.push_back(mesh.vertices[index(row, c)]);
+      e.normals.push_back(mesh.normals[index(row, c)]);
+      e.rise.push_back(mesh.vertices[index(next_row, c)] - mesh.vertices[index(row, c)]);
+      e.fissure.push_back(u);
+    }
+    return e;
+  };
+  mesh.upper_edge = edge(lower_count + kMarginRows, lower_count + kMarginRows + 1);
+  mesh.lower_edge = edge(lower_count - 1 - kMarginRows, lower_count - 2 - kMarginRows);
   return mesh;
 }
 

@@ -48,10 +48,21 @@
 
 namespace purkinje::renderer {
 
+// A margin's anterior edge, where its rounding meets the lid's skin (the
+// lashes' roots): the mesh's vertices there, one per column inside the
+// fissure, from the lateral canthus to the medial.
+struct MarginEdge {
+  std::vector<Point3> points;        // world
+  std::vector<UnitVector3> normals;  // the skin's shading normals
+  std::vector<Vector3> rise;         // to the next row, away from the opening
+  std::vector<double> fissure;       // -1 at the lateral canthus, 0 middle, 1 medial
+};
+
 struct FaceMesh {
   std::vector<Point3> vertices;      // world
   std::vector<Triangle> triangles;   // front faces out of the face
   std::vector<UnitVector3> normals;  // per vertex, world
+  MarginEdge upper_edge, lower_edge;
 };
 
 // `support_depth(x, y)`: the head-frame z where a ray along -z from

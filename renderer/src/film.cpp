@@ -133,7 +133,7 @@ std::vector<Refine> Film::refinement(const PixelRegion& region, const PixelRegio
   return edges;
 }
 
-void Film::add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool) {
+void Film::add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes) {
   pool.give(coverage_[0]);  // the background's: only adaptive sampling needed it
   aovs.push_back({"depth", std::move(depth_)});
   aovs.push_back({"N.x", std::move(nx_)});
@@ -144,6 +144,11 @@ void Film::add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool) {
   aovs.push_back({"sclera", std::move(coverage_[2])});
   aovs.push_back({"iris", std::move(coverage_[3])});
   aovs.push_back({"pupil", std::move(coverage_[4])});
+  if (lashes) {
+    aovs.push_back({"lash", std::move(coverage_[5])});
+  } else {
+    pool.give(coverage_[5]);
+  }
   aovs.push_back({"cornea", std::move(cornea_)});
 }
 

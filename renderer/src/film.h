@@ -43,8 +43,8 @@ class PlanePool {
 // Why refinement() refines a pixel.
 enum class Refine : std::uint8_t { no = 0, texture, outline, strong_edge };
 
-// The segmentation's classes: background, skin, sclera, iris, pupil.
-constexpr int kClasses = 5;
+// The segmentation's classes: background, skin, sclera, iris, pupil, lash.
+constexpr int kClasses = 6;
 
 class Film {
  public:
@@ -73,11 +73,12 @@ class Film {
 
   // The planes, handed over once the pixels are done: the radiance, the
   // diffuse electrons (before the optics), and the AOVs in their order
-  // (depth, N.x, N.y, N.z, id, skin, sclera, iris, pupil, cornea), the
-  // background's coverage going back to the pool.
+  // (depth, N.x, N.y, N.z, id, skin, sclera, iris, pupil, lash if
+  // `lashes`, cornea), the background's coverage (and the lashes' without
+  // them) going back to the pool.
   ImagePlane take_radiance() { return std::move(radiance_); }
   ImagePlane& diffuse_electrons() { return diffuse_electrons_; }
-  void add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool);
+  void add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes);
 
  private:
   ImagePlane radiance_, diffuse_electrons_, depth_, nx_, ny_, nz_, id_;

@@ -21,7 +21,8 @@ Scattering scattering_of(Surface surface) {
     case Surface::none: return Scattering::none;
     case Surface::skin:
     case Surface::sclera:
-    case Surface::mesh: return Scattering::diffuse;
+    case Surface::mesh:
+    case Surface::lash: return Scattering::diffuse;
     case Surface::iris: return Scattering::iris;
     case Surface::pupil: return Scattering::pupil;
     case Surface::cornea_anterior:
@@ -40,6 +41,14 @@ std::vector<Light> lights_of(const Scene& scene, const Camera& camera) {
   return lights;
 }
 
+bool has_lashes(const Scene& scene) {
+  for (const Eye& eye : scene.eyes) {
+    const auto& face = eye.appearance().face;
+    if (face && face->lashes) return true;
+  }
+  return false;
+}
+
 PixelClass class_of(Surface s) {
   switch (s) {
     case Surface::skin: return PixelClass::skin;
@@ -49,6 +58,7 @@ PixelClass class_of(Surface s) {
     case Surface::sclera: return PixelClass::sclera;
     case Surface::iris: return PixelClass::iris;
     case Surface::pupil: return PixelClass::pupil;
+    case Surface::lash: return PixelClass::lash;
     default: return PixelClass::background;
   }
 }
@@ -72,6 +82,9 @@ double diffuse_albedo(const Scene& scene, const Hit& hit) {
       return hit.front_face ? scene.eyes[hit.eye].appearance().skin_albedo : 0.0;
     case Surface::mesh:
       return scene.meshes[hit.mesh].albedo;
+    case Surface::lash:
+      // Inside a lash (a ray from its own surface inward): nothing returns.
+      return hit.front_face ? scene.eyes[hit.eye].appearance().face->lashes->albedo : 0.0;
     case Surface::sclera:
       return hit.front_face ? scene.eyes[hit.eye].appearance().sclera_albedo : 0.0;
     case Surface::iris: {

@@ -129,6 +129,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     lane.t_hi = t;
     lane.surface = &surface;
     lane.mesh = nullptr;
+    lane.lashes = nullptr;
     lane.local_point = local_point;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
     RTCHitN_geomID(hits, args->N, i) = args->geomID;
@@ -175,7 +176,8 @@ void mesh_intersect_filter(const RTCFilterFunctionNArguments* args) {
     lane.t_hi = t;
     lane.surface = nullptr;
     lane.mesh = &mesh;
-    lane.triangle = triangle;
+    lane.lashes = nullptr;
+    lane.primitive = triangle;
     RTCRayN_tfar(args->ray, args->N, i) = embree_far(t - lane.t_shift);
   }
 }
@@ -192,6 +194,62 @@ void mesh_occluded_filter(const RTCFilterFunctionNArguments* args) {
       continue;
     }
     lane.mesh = &mesh;  // Embree ends the query on an accepted hit
+  }
+}
+
+// An eye's lashes: one user primitive per capsule, as the surfaces'
+// callbacks but indexed by primID.
+void lash_bounds_callback(const RTCBoundsFunctionArguments* args) {
+  const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
+  const Box b = lashes.bounds(args->primID);
+  RTCBounds* out = args->bounds_o;
+  out->lower_x = std::nextafter(static_cast<float>(b.lo.x), -INFINITY);
+  out->lower_y = std::nextafter(static_cast<float>(b.lo.y), -INFINITY);
+  out->lower_z = std::nextafter(static_cast<float>(b.lo.z), -INFINITY);
+  out->upper_x = std::nextafter(static_cast<float>(b.hi.x), INFINITY);
+  out->upper_y = std::nextafter(static_cast<float>(b.hi.y), INFINITY);
+  out->upper_z = std::nextafter(static_cast<float>(b.hi.z), INFINITY);
+}
+
+void lash_intersect_callback(const RTCIntersectFunctionNArguments* args) {
+  auto* query = reinterpret_cast<Query*>(args->context);
+  const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
+  RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
+  RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Lane& lane = query->lanes[RTCRayN_id(rays, args->N, i)];
+    double t;
+    if (!lashes.hit(lane, args->primID, t)) continue;
+    lane.t_hi = t;
+    lane.surface = nullptr;
+    lane.mesh = nullptr;
+    lane.lashes = &lashes;
+    lane.primitive = args->primID;
+    RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
+    RTCHitN_geomID(hits, args->N, i) = args->geomID;
+    RTCHitN_primID(hits, args->N, i) = args->primID;
+    RTCHitN_instID(hits, args->N, i, 0) = query->embree.instID[0];
+    RTCHitN_Ng_x(hits, args->N, i) = 0.0f;
+    RTCHitN_Ng_y(hits, args->N, i) = 0.0f;
+    RTCHitN_Ng_z(hits, args->N, i) = 0.0f;
+    RTCHitN_u(hits, args->N, i) = 0.0f;
+    RTCHitN_v(hits, args->N, i) = 0.0f;
+  }
+}
+
+void lash_occluded_callback(const RTCOccludedFunctionNArguments* args) {
+  auto* query = reinterpret_cast<Query*>(args->context);
+  const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
+    if (lane.found()) continue;
+    double t;
+    if (!lashes.hit(lane, args->primID, t)) continue;
+    lane.lashes = &lashes;
+    lane.primitive = args->primID;
+    RTCRayN_tfar(args->ray, args->N, i) = -INFINITY;  // Embree's "occluded"
   }
 }
 
@@ -240,6 +298,7 @@ struct RayTracer::Impl {
   RTCScene scene = nullptr;
   SurfaceList surfaces;
   std::vector<std::unique_ptr<PlacedMesh>> meshes;
+  std::vector<std::unique_ptr<PlacedLashes>> lashes;
   Box bounds{{0, 0, 0}, {0, 0, 0}};
   double diagonal = 0;  // of the bounds: no ray from inside stays inside longer
   bool empty = true;
@@ -379,20 +438,35 @@ struct RayTracer::Impl {
     }
   }
 
-  bool occluded(const Point3& from, const Point3& to, bool skip_cornea) const {
+  // The segment's lane, both ends trimmed (see occluded()); false for a
+  // segment too short to hold anything.
+  static bool segment_lane(const Point3& from, const Point3& to, Lane& lane) {
     const Vector3 v = to - from;
     check_ray(from, v, 0, 0);
     check_ray(to, v, 0, 0);
     const double length = v.norm();
     const double eps = 1e-6 * length + 1e-9;
     if (!(length > 2 * eps)) return false;
-    Lane lane;
     lane.origin = from;
     lane.direction = v / length;
     lane.t_lo = eps;
     lane.t_hi = length - eps;
+    return true;
+  }
+
+  bool occluded(const Point3& from, const Point3& to, bool skip_cornea) const {
+    Lane lane;
+    if (!segment_lane(from, to, lane)) return false;
     run<true>(lane, skip_cornea);
     return lane.found();
+  }
+
+  // The closest hit from `to` back toward `from`.
+  Surface occluder(const Point3& from, const Point3& to, bool skip_cornea) const {
+    Lane lane;
+    if (!segment_lane(to, from, lane)) return Surface::none;
+    run<false>(lane, skip_cornea);
+    return lane.surface ? lane.surface->kind() : lane.mesh ? lane.mesh->kind() : lane.lashes ? Surface::lash : Surface::none;
   }
 
   // One Embree triangle geometry; its filters recompute hits in double.
@@ -429,6 +503,7 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   SceneGeometry geometry = build_scene_geometry(scene);
   impl.surfaces = std::move(geometry.surfaces);
   impl.meshes = std::move(geometry.meshes);
+  impl.lashes = std::move(geometry.lashes);
 
   const EmbreeDevice wanted = embree_device();
   impl.device = rtcNewDevice(wanted.config.c_str());
@@ -482,9 +557,28 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
                  std::max(bounds.hi.z, b.hi.z)};
   }
+  for (const auto& lashes : impl.lashes) {
+    RTCGeometry geometry = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_USER);
+    impl.check("creating a user geometry");
+    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(lashes->segments().size()));
+    rtcSetGeometryUserData(geometry, lashes.get());
+    rtcSetGeometryBoundsFunction(geometry, &lash_bounds_callback, nullptr);
+    rtcSetGeometryIntersectFunction(geometry, &lash_intersect_callback);
+    rtcSetGeometryOccludedFunction(geometry, &lash_occluded_callback);
+    if (impl.masks) rtcSetGeometryMask(geometry, kOtherMask);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(impl.scene, geometry);
+    rtcReleaseGeometry(geometry);
+    impl.check("adding lashes");
+    const Box b = lashes->world_bounds();
+    bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
+                 std::min(bounds.lo.z, b.lo.z)};
+    bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
+                 std::max(bounds.hi.z, b.hi.z)};
+  }
   rtcCommitScene(impl.scene);
   impl.check("building the scene");
-  impl.empty = impl.surfaces.empty() && impl.meshes.empty();
+  impl.empty = impl.surfaces.empty() && impl.meshes.empty() && impl.lashes.empty();
   if (!impl.empty) {
     // A margin more, so that a float ray starting on this box starts
     // clear of every geometry's (padded) bounds.
@@ -540,6 +634,10 @@ bool RayTracer::occluded(const Point3& from, const Point3& to) const {
 
 bool RayTracer::occluded_except_cornea(const Point3& from, const Point3& to) const {
   return impl_->occluded(from, to, true);
+}
+
+Surface RayTracer::occluder_except_cornea(const Point3& from, const Point3& to) const {
+  return impl_->occluder(from, to, true);
 }
 
 }  // namespace purkinje::renderer

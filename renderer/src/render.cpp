@@ -359,9 +359,18 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   result.camera = camera_index;
   const RayTracer tracer(scene);
   // Labels agree with what the camera can see: a glint or pupil point whose
-  // light or view the lids, the sclera or a mesh blocks is occluded.
+  // light or view the lids, a lash, the sclera or a mesh blocks is occluded,
+  // with what the camera sees in front of it (or what shadows it).
   TruthOptions truth_options;
-  truth_options.occluded = [&](const Point3& from, const Point3& to) { return tracer.occluded_except_cornea(from, to); };
+  truth_options.occluded = [&](const Point3& from, const Point3& to) {
+    switch (tracer.occluder_except_cornea(from, to)) {
+      case Surface::none: return Occluder::none;
+      case Surface::skin: return Occluder::skin;
+      case Surface::lash: return Occluder::lash;
+      case Surface::mesh: return Occluder::mesh;
+      default: return Occluder::eye;
+    }
+  };
   result.truth = compute_truth(scene, truth_options);
 
   const int spp = options.samples_per_pixel;
@@ -431,7 +440,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   if (!options.noise) sensor.noise = false;
   arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
 
-  film.add_aovs(result.aovs, pool);
+  film.add_aovs(result.aovs, pool, has_lashes(scene));
   result.aovs.push_back({"glint", fraction_of_signal(glint_total, result.electrons)});
   for (std::size_t l = 0; l < glint_planes.size(); ++l) {
     result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l], result.electrons)});

@@ -10,6 +10,7 @@
 #include "purkinje/models/input_file.h"
 #include "purkinje/models/labels.h"
 #include "purkinje/models/output_file.h"
+#include "materials.h"
 #include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/render.h"
 
@@ -124,8 +125,9 @@ std::string render_settings_json(const Scene& scene, int camera, const RenderOpt
 }
 
 std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions& options) {
-  std::vector<std::string> names = {"Y",      "electrons", "depth", "N.x",  "N.y",    "N.z",   "id",
-                                    "skin",   "sclera",    "iris",  "pupil", "cornea", "glint"};
+  std::vector<std::string> names = {"Y", "electrons", "depth", "N.x", "N.y", "N.z", "id", "skin", "sclera", "iris", "pupil"};
+  if (has_lashes(scene)) names.push_back("lash");
+  names.insert(names.end(), {"cornea", "glint"});
   if (options.per_light_glint_masks) {
     for (const Illuminator& light : scene.illuminators) names.push_back("glint." + light.name);
   }

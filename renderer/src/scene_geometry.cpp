@@ -20,6 +20,7 @@ const char* to_string(Surface s) {
     case Surface::cornea_anterior: return "cornea_anterior";
     case Surface::cornea_posterior: return "cornea_posterior";
     case Surface::mesh: return "mesh";
+    case Surface::lash: return "lash";
   }
   return "unknown";
 }
@@ -180,8 +181,16 @@ void add_face(SceneGeometry& geometry, const Scene& scene, int index, const Eye&
   for (std::size_t j = 0; j < scene.eyes.size(); ++j) {
     if (static_cast<int>(j) != index && scene.eyes[j].appearance().face) alone = false;
   }
-  geometry.meshes.push_back(
-      std::make_unique<PlacedMesh>(index, build_face_mesh(eye, H, turns, support_depth, alone)));
+  FaceMesh face = build_face_mesh(eye, H, turns, support_depth, alone);
+  if (const auto& lashes = eye.appearance().face->lashes) {
+    // Streams 2 index and 2 index + 1: each lid of each eye its own draws.
+    const auto stream = 2 * static_cast<std::uint64_t>(index);
+    std::vector<LashSegment> segments = build_lashes(*lashes, face.upper_edge, true, stream);
+    const std::vector<LashSegment> lower = build_lashes(*lashes, face.lower_edge, false, stream + 1);
+    segments.insert(segments.end(), lower.begin(), lower.end());
+    if (!segments.empty()) geometry.lashes.push_back(std::make_unique<PlacedLashes>(index, std::move(segments)));
+  }
+  geometry.meshes.push_back(std::make_unique<PlacedMesh>(index, std::move(face)));
 
   const Eyelids& lids = *eye.appearance().eyelids;
   surfaces::PlaneRegion floor;
@@ -258,6 +267,80 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
 }
 
 }  // namespace
+
+bool PlacedLashes::hit(const Lane& lane, unsigned segment, double& t) const {
+  const LashSegment& c = segments_[segment];
+  // Solved from the ray's closest approach to the capsule's root end, so
+  // that the coefficients are millimetre-sized whatever the ray's origin.
+  const Vector3& d = lane.direction;  // unit
+  const double shift = dot(c.a - lane.origin, d);
+  const Point3 o = lane.origin + d * shift;
+  const double lo = lane.t_lo - shift, hi = lane.t_hi - shift;
+  const Vector3 ba = c.b - c.a, oa = o - c.a;
+  const double baba = dot(ba, ba), bard = dot(ba, d), baoa = dot(ba, oa), rdoa = dot(d, oa);
+  const double r2 = c.radius_mm * c.radius_mm;
+  double best = INFINITY;
+  // A crossing counts where it lies on the capsule's own surface: the side
+  // between the ends, or an end's hemisphere beyond it.
+  const auto consider = [&](double r, bool on_surface) {
+    if (on_surface && r > lo && r < hi && r < best) best = r;
+  };
+  const double a = baba - bard * bard;
+  if (a > 1e-12 * baba) {  // not along the axis: the side
+    const double b = baba * rdoa - baoa * bard;
+    const double cc = baba * dot(oa, oa) - baoa * baoa - r2 * baba;
+    const double disc = b * b - a * cc;
+    if (disc >= 0) {
+      const double q = -(b + std::copysign(std::sqrt(disc), b));
+      for (const double r : {q / a, q != 0 ? cc / q : q / a}) {
+        const double y = baoa + r * bard;
+        consider(r, y > 0 && y < baba);
+      }
+    }
+  }
+  for (int end = 0; end < 2; ++end) {
+    const Vector3 oc = end == 0 ? oa : o - c.b;
+    const double b = dot(d, oc), cc = dot(oc, oc) - r2;
+    const double disc = b * b - cc;
+    if (disc < 0) continue;
+    const double root = std::sqrt(disc);
+    for (const double r : {-b - root, -b + root}) {
+      const double y = baoa + r * bard;
+      consider(r, end == 0 ? y <= 0 : y >= baba);
+    }
+  }
+  if (!(best < INFINITY)) return false;
+  t = shift + best;
+  return true;
+}
+
+UnitVector3 PlacedLashes::normal(unsigned segment, const Point3& p) const {
+  const LashSegment& c = segments_[segment];
+  const Vector3 ba = c.b - c.a;
+  const double h = std::clamp(dot(p - c.a, ba) / dot(ba, ba), 0.0, 1.0);
+  const auto n = UnitVector3::try_normalize(p - (c.a + ba * h));
+  return n ? *n : UnitVector3::normalize(ba);
+}
+
+Box PlacedLashes::bounds(unsigned segment) const {
+  const LashSegment& c = segments_[segment];
+  const double extent = std::max({std::abs(c.a.x), std::abs(c.a.y), std::abs(c.a.z), std::abs(c.b.x),
+                                  std::abs(c.b.y), std::abs(c.b.z)});
+  const double pad = c.radius_mm + 1e-3 + 1e-6 * extent;
+  const Vector3 p{pad, pad, pad};
+  return {Point3{std::min(c.a.x, c.b.x), std::min(c.a.y, c.b.y), std::min(c.a.z, c.b.z)} - p,
+          Point3{std::max(c.a.x, c.b.x), std::max(c.a.y, c.b.y), std::max(c.a.z, c.b.z)} + p};
+}
+
+Box PlacedLashes::world_bounds() const {
+  Box all{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+  for (unsigned i = 0; i < segments_.size(); ++i) {
+    const Box b = bounds(i);
+    all.lo = {std::min(all.lo.x, b.lo.x), std::min(all.lo.y, b.lo.y), std::min(all.lo.z, b.lo.z)};
+    all.hi = {std::max(all.hi.x, b.hi.x), std::max(all.hi.y, b.hi.y), std::max(all.hi.z, b.hi.z)};
+  }
+  return all;
+}
 
 SceneGeometry build_scene_geometry(const Scene& scene) {
   SceneGeometry geometry;

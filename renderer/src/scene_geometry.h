@@ -66,6 +66,7 @@
 #include "purkinje/models/scene.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "face_mesh.h"
+#include "lashes.h"
 #include "surfaces.h"
 
 namespace purkinje::renderer {
@@ -75,6 +76,7 @@ using surfaces::Segment;
 
 class PlacedSurface;
 class PlacedMesh;
+class PlacedLashes;
 
 // A local frame (eye or head), shared by the surfaces built in it: its Pose
 // and that Pose's inverse as plain numbers, so that the hot path's
@@ -108,10 +110,12 @@ struct Lane {
   double t_lo = 0;
   double t_hi = 0;     // shrinks to the closest hit so far
   double t_shift = 0;  // the Embree ray starts at origin + t_shift direction
-  // The closest hit so far, or the occluder: a surface or a mesh's triangle.
+  // The closest hit so far, or the occluder: a surface, a mesh's triangle
+  // or a lash's capsule (at most one of the three set).
   const PlacedSurface* surface = nullptr;
   const PlacedMesh* mesh = nullptr;
-  unsigned triangle = 0;
+  const PlacedLashes* lashes = nullptr;
+  unsigned primitive = 0;  // the triangle or capsule
   Point3 local_point;
   // The ray in the last frame used: an eye's surfaces share one frame, so
   // most callbacks skip the transform.
@@ -120,7 +124,7 @@ struct Lane {
   Vector3 local_direction;
   double local_shift = 0;  // t of local_origin
 
-  bool found() const { return surface || mesh; }
+  bool found() const { return surface || mesh || lashes; }
 };
 
 // One Embree geometry: a shape placed in the world by its local frame.
@@ -298,6 +302,30 @@ class PlacedMesh {
   std::vector<UnitVector3> normals_;  // per vertex; empty: flat
 };
 
+// An eye's lashes (lashes.h): one Embree user primitive per capsule, each
+// intersected in double precision as the analytic surfaces are (and
+// unlike Embree's own curves, which are intersected in float by kernels
+// that differ between instruction sets). Shaded with the capsule's
+// normal: a hair's fibre seen across.
+class PlacedLashes {
+ public:
+  PlacedLashes(int eye, std::vector<LashSegment> segments) : eye_(eye), segments_(std::move(segments)) {}
+
+  int eye() const { return eye_; }
+  const std::vector<LashSegment>& segments() const { return segments_; }
+
+  // The first crossing of capsule `segment` by the lane's ray in (t_lo, t_hi).
+  bool hit(const Lane& lane, unsigned segment, double& t) const;
+  UnitVector3 normal(unsigned segment, const Point3& p) const;
+  // Padded as PlacedSurface::world_bounds.
+  Box bounds(unsigned segment) const;
+  Box world_bounds() const;
+
+ private:
+  int eye_;
+  std::vector<LashSegment> segments_;
+};
+
 using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
 
 // Every surface and mesh of a scene, placed. Throws std::invalid_argument
@@ -308,6 +336,7 @@ using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
 struct SceneGeometry {
   SurfaceList surfaces;
   std::vector<std::unique_ptr<PlacedMesh>> meshes;  // those with triangles
+  std::vector<std::unique_ptr<PlacedLashes>> lashes;  // eyes with at least one lash
 };
 SceneGeometry build_scene_geometry(const Scene& scene);
 
@@ -331,11 +360,17 @@ inline Hit hit_of(const Ray& ray, const Lane& lane) {
     const PlacedMesh& mesh = *lane.mesh;
     hit.surface = mesh.kind();
     (mesh.kind() == Surface::mesh ? hit.mesh : hit.eye) = mesh.index();
-    hit.triangle = static_cast<int>(lane.triangle);
+    hit.triangle = static_cast<int>(lane.primitive);
     // Which side the ray meets is the triangle's; the shading normal may
     // lean past the ray at a silhouette.
-    hit.front_face = dot(ray.direction, mesh.normal(lane.triangle)) < 0;
-    hit.normal = mesh.shading_normal(lane.triangle, hit.point);
+    hit.front_face = dot(ray.direction, mesh.normal(lane.primitive)) < 0;
+    hit.normal = mesh.shading_normal(lane.primitive, hit.point);
+  } else if (lane.lashes) {
+    hit.surface = Surface::lash;
+    hit.eye = lane.lashes->eye();
+    hit.triangle = static_cast<int>(lane.primitive);
+    hit.normal = lane.lashes->normal(lane.primitive, hit.point);
+    hit.front_face = dot(ray.direction, hit.normal) < 0;
   } else {
     hit.surface = lane.surface->kind();
     hit.eye = lane.surface->eye();

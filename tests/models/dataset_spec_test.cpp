@@ -6,12 +6,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include "purkinje/models/dataset_spec.h"
+#include "purkinje/models/scene_file.h"
 
 namespace purkinje {
 namespace {
@@ -320,6 +323,34 @@ TEST(DatasetSpec, TheFaceParametersReachTheFirstEyesFaceOnly) {
   }
 }
 
+TEST(DatasetSpec, TheLashParametersReachTheFirstEyesLashes) {
+  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "lash_spec";
+  std::filesystem::create_directories(folder);
+  {
+    // The bundled face with lashes on its first eye.
+    Scene lashed = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote_face.json");
+    EyeAppearance look = lashed.eyes[0].appearance();
+    look.face->lashes = Lashes{};
+    lashed.eyes[0].set_appearance(look);
+    std::ofstream(folder / "lashed.json") << scene_to_json(lashed);
+  }
+  const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "lashed.json", "count": 10,
+      "parameters": {"lash_upper_per_mm": {"uniform": [2, 6]}, "lash_lower_per_mm": {"uniform": [0, 4]},
+      "lash_upper_length_mm": {"uniform": [7, 12]}, "lash_lower_length_mm": {"uniform": [5, 8]},
+      "lash_upper_curl_deg": {"uniform": [10, 70]}, "lash_lower_curl_deg": {"uniform": [0, 40]},
+      "lash_root_deg": {"uniform": [0, 40]}, "lash_thickness_mm": {"uniform": [0.06, 0.15]},
+      "lash_albedo": {"choice": [0.03, 0.1]}, "lash_seed": {"choice": [3, 4]}}})",
+                                              "f.json", folder);
+  for (std::uint64_t k : {0u, 7u}) {
+    const ImageDraw d = draw_image(spec, k);
+    const Lashes& lashes = *scene_for_image(spec, d).eyes[0].appearance().face->lashes;
+    for (const LashKey& key : kLashKeys) {
+      EXPECT_EQ(lashes.*key.member, column(spec, d, "lash_" + std::string(key.name))) << key.name;
+    }
+    EXPECT_EQ(static_cast<double>(lashes.seed), column(spec, d, "lash_seed"));
+  }
+}
+
 TEST(DatasetSpec, ADrawNoEyeCanHaveIsNamedWithItsImageAndValues) {
   // A pupil of 6 mm in an iris of 5.9: the anatomy rule, at image 0.
   const DatasetSpec spec = spec_with(R"("parameters": {"pupil_radius_mm": {"uniform": [5.95, 6]}})");
@@ -379,6 +410,7 @@ const Malformed kMalformed[] = {
     {R"("parameters": {"lid_opening": 1.5})", "parameters.lid_opening = 1.5: must be in [0, 1] (lid_opening)"},
     {R"("parameters": {"canthal_tilt_deg": {"uniform": [0, 20]}})", "parameters.canthal_tilt_deg.uniform[1] = 20: must be in [-15, 15] (canthal_tilt_deg)"},
     {R"("parameters": {"crease_height_mm": 3})", "parameters.crease_height_mm: the scene's first eye has no face (scene-format.md: face)"},
+    {R"("parameters": {"lash_albedo": 0.05})", "parameters.lash_albedo: the scene's first eye has no lashes (scene-format.md: lashes)"},
     {R"("parameters": {"midline_mm": 30})", "parameters.midline_mm = 30: unknown key"},
     {R"("parameters": {"iris_albedo": {"grid": {"from": 0.1, "to": 0.2, "steps": 0}}})", "parameters.iris_albedo.grid.steps = 0: must be in [1, 1000000]"},
     {R"("parameters": {"illuminators": {"led_middle": {"on": false}}})", "parameters.illuminators.led_middle = {...}: unknown key (valid keys here: led_left, led_right)"},

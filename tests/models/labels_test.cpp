@@ -155,7 +155,23 @@ TEST(Labels, TheEyesFaceIsWrittenAsTheSceneGivesIt) {
   EXPECT_EQ(face["canthal_tilt_deg"].get<double>(), -3.5);
   EXPECT_EQ(face["crease_height_mm"].get<double>(), 0);
   EXPECT_EQ(face["midline_mm"].get<double>(), 31.5);  // the default
-  EXPECT_EQ(face.size(), 8u);
+  EXPECT_TRUE(face["lashes"].is_null());
+  EXPECT_EQ(face.size(), 9u);
+}
+
+TEST(Labels, TheEyesLashesAreWrittenAsTheSceneGivesThem) {
+  const Scene scene = parse_scene(R"({ "format": 1, "name": "lashes",
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "illuminators": [ { "name": "a", "position_mm": [-100, 0, 0] }, { "name": "b", "position_mm": [100, 0, 0] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {}, "eyelids": {},
+                "face": { "lashes": { "albedo": 0.04, "seed": 12 } } } ] })",
+                                  "lashes.json");
+  const json lashes = json::parse(truth_to_json(scene, hand_made_truth()))["eyes"][0]["appearance"]["face"]["lashes"];
+  EXPECT_EQ(lashes["albedo"].get<double>(), 0.04);
+  EXPECT_EQ(lashes["seed"].get<std::uint64_t>(), 12u);
+  EXPECT_EQ(lashes["upper_length_mm"].get<double>(), Lashes{}.upper_length_mm);
+  EXPECT_EQ(lashes.size(), kLashKeys.size() + 1);
 }
 
 TEST(Labels, CsvHasOneRowPerFeatureAndEmptyCellsForMissingValues) {

@@ -558,6 +558,45 @@ TEST(SceneFile, FaceErrorsNameTheKeyAndTheRule) {
   }
 }
 
+TEST(SceneFile, ReadsEveryLashKeyAndWritesThemBack) {
+  const Scene scene = parse_scene(eye_with(R"("eyelids": {}, "face": { "lashes": { "upper_per_mm": 3.5,
+      "lower_per_mm": 0, "upper_length_mm": 11, "lower_length_mm": 7.5, "upper_curl_deg": 60, "lower_curl_deg": -10,
+      "root_deg": 35, "thickness_mm": 0.12, "albedo": 0.03, "seed": 9007199254740991 } })"),
+                                  "s.json");
+  const Lashes& l = *scene.eyes[0].appearance().face->lashes;
+  EXPECT_DOUBLE_EQ(l.upper_per_mm, 3.5);
+  EXPECT_DOUBLE_EQ(l.lower_per_mm, 0);
+  EXPECT_DOUBLE_EQ(l.upper_length_mm, 11);
+  EXPECT_DOUBLE_EQ(l.lower_length_mm, 7.5);
+  EXPECT_DOUBLE_EQ(l.upper_curl_deg, 60);
+  EXPECT_DOUBLE_EQ(l.lower_curl_deg, -10);
+  EXPECT_DOUBLE_EQ(l.root_deg, 35);
+  EXPECT_DOUBLE_EQ(l.thickness_mm, 0.12);
+  EXPECT_DOUBLE_EQ(l.albedo, 0.03);
+  EXPECT_EQ(l.seed, 9007199254740991u);  // the largest seed a scene file takes (2^53 - 1)
+  const Lashes back = *parse_scene(scene_to_json(scene), "back.json").eyes[0].appearance().face->lashes;
+  for (const LashKey& key : kLashKeys) EXPECT_EQ(back.*key.member, l.*key.member) << key.name;
+  EXPECT_EQ(back.seed, l.seed);
+  // "lashes": {} is every default; without it, none.
+  const Scene defaults = parse_scene(eye_with(R"("eyelids": {}, "face": { "lashes": {} })"), "s.json");
+  EXPECT_EQ(defaults.eyes[0].appearance().face->lashes->upper_length_mm, Lashes{}.upper_length_mm);
+  EXPECT_FALSE(parse_scene(eye_with(R"("eyelids": {}, "face": {})"), "s.json").eyes[0].appearance().face->lashes);
+}
+
+TEST(SceneFile, LashErrorsNameTheKeyAndTheRule) {
+  const std::map<std::string, std::string> bad = {
+      {R"({ "upper_per_mm": 11 })", "eyes[0].face.lashes.upper_per_mm = 11: must be between 0 and 10"},
+      {R"({ "thickness_mm": 0 })", "eyes[0].face.lashes.thickness_mm = 0: must be between 0.02 and 0.3"},
+      {R"({ "upper_curl_deg": 180 })", "eyes[0].face.lashes.upper_curl_deg = 180: must be between -30 and 120"},
+      {R"({ "seed": -1 })", "eyes[0].face.lashes.seed = -1"},
+      {R"({ "colour": 1 })", "eyes[0].face.lashes.colour = 1: unknown key"},
+  };
+  for (const auto& [lashes, expected] : bad) {
+    const std::string error = parse_error(eye_with(R"("eyelids": {}, "face": { "lashes": )" + lashes + " }"));
+    EXPECT_EQ(error.find("scene.json: " + expected), 0u) << lashes << "\n  message: " << error;
+  }
+}
+
 TEST(SceneFile, HeadFrameIsNormalizedWithUpMadePerpendicular) {
   // forward [0, 0, -2] -> (0, 0, -1); up [0, -1, -1] has 1 along forward,
   // which is removed: (0, -1, -1) - 1 x (0, 0, -1) = (0, -1, 0).

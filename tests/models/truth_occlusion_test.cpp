@@ -31,7 +31,7 @@ TEST(TruthOcclusion, NothingBlockedIsTheTruthWithoutOcclusion) {
   const SceneTruth plain = compute_truth(scene);
   TruthOptions options;
   int asked = 0;
-  options.occluded = [&](const Point3&, const Point3&) { return ++asked, false; };
+  options.occluded = [&](const Point3&, const Point3&) { return ++asked, Occluder::none; };
   const SceneTruth open = compute_truth(scene, options);
   EXPECT_GT(asked, 36);  // every ok glint's two legs, every ok border point, the centre
   ASSERT_EQ(open.views.size(), plain.views.size());
@@ -48,13 +48,19 @@ TEST(TruthOcclusion, NothingBlockedIsTheTruthWithoutOcclusion) {
 
 // A lid over the upper half of the eye: whatever lies above the cornea's
 // centre (in world y, up) is hidden from the camera, and lights cannot
-// reach the glints there either.
+// reach the glints there either. What blocks a segment is named by its
+// end: "skin" toward the camera, "lash" toward a light, so that a glint's
+// label shows which leg was asked first.
 TEST(TruthOcclusion, ALidOverTheUpperHalfHidesWhatLiesAboveAndLeavesTheWholePupilsEllipse) {
   const Scene scene = bundled("remote");
   const double lid_y = scene.eyes[0].cornea_center().y;
   const auto above = [&](const Point3& p) { return p.y > lid_y; };
+  const Point3 camera = scene.cameras[0].center();
   TruthOptions options;
-  options.occluded = [&](const Point3& from, const Point3& to) { return above(from) || above(to); };
+  options.occluded = [&](const Point3& from, const Point3& to) {
+    if (!above(from) && !above(to)) return Occluder::none;
+    return to == camera ? Occluder::skin : Occluder::lash;
+  };
   const SceneTruth plain = compute_truth(scene);
   const SceneTruth lidded = compute_truth(scene, options);
 
@@ -65,6 +71,11 @@ TEST(TruthOcclusion, ALidOverTheUpperHalfHidesWhatLiesAboveAndLeavesTheWholePupi
                          above(scene.cameras[0].center());
     const PathStatus expected = before.status == PathStatus::ok && blocked ? PathStatus::occluded : before.status;
     EXPECT_EQ(lidded.views[0].glints[g].status, expected) << "glint " << g;
+    // What the camera sees in front of it first, else what shadows it.
+    const Occluder by = expected != PathStatus::occluded                        ? Occluder::none
+                        : above(before.reflection.point) || above(camera) ? Occluder::skin
+                                                                            : Occluder::lash;
+    EXPECT_EQ(lidded.views[0].glints[g].occluder, by) << "glint " << g;
   }
   std::vector<Pixel> below;
   int hidden = 0;
@@ -74,6 +85,7 @@ TEST(TruthOcclusion, ALidOverTheUpperHalfHidesWhatLiesAboveAndLeavesTheWholePupi
     ASSERT_EQ(before.status, PathStatus::ok);
     const bool hides = above(before.refraction.anterior_point);
     EXPECT_EQ(pupil.border[k].status, hides ? PathStatus::occluded : PathStatus::ok) << "border point " << k;
+    EXPECT_EQ(pupil.border[k].occluder, hides ? Occluder::skin : Occluder::none) << "border point " << k;
     EXPECT_EQ(pupil.border[k].pixel.u, before.pixel.u);
     if (hides) {
       ++hidden;
@@ -101,7 +113,7 @@ TEST(TruthOcclusion, ALidOverTheUpperHalfHidesWhatLiesAboveAndLeavesTheWholePupi
 TEST(TruthOcclusion, AClosedLidLeavesNoVisibleEllipse) {
   const Scene scene = bundled("headset");
   TruthOptions options;
-  options.occluded = [](const Point3&, const Point3&) { return true; };
+  options.occluded = [](const Point3&, const Point3&) { return Occluder::skin; };
   const SceneTruth truth = compute_truth(scene, options);
   const PupilTruth& pupil = truth.views[0].pupil;
   EXPECT_TRUE(pupil.ellipse_valid);

@@ -143,6 +143,19 @@ def test_files_are_refused_as_the_command_line_refuses_them(remote_file, tmp_pat
         purkinje.read_exr(tmp_path / "file")
 
 
+def test_lashes_are_a_class_and_labels_say_what_hides_a_point():
+    d = purkinje.load_scene(SOURCE_DIR / "assets/scenes/headset.json").to_dict()
+    # Half open: the upper lid hides the pupil's top, its lashes some of
+    # the points below the margin (4 of 36 at this seed).
+    d["eyes"][0]["eyelids"]["opening"] = 0.5
+    d["eyes"][0]["face"] = {"lashes": {}}
+    result = purkinje.render(purkinje.parse_scene(d))
+    assert (result.segmentation == 5).any()
+    border = result.labels.views[0].pupil.border
+    assert all(p.occluded_by is None for p in border if p.status != "occluded")
+    assert {p.occluded_by for p in border if p.status == "occluded"} == {"skin", "lash"}
+
+
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():
     import subprocess
     import sys

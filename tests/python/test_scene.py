@@ -124,6 +124,9 @@ def test_a_face_is_a_keyword_as_in_the_file():
     assert face["side"] == "left" and face["canthal_tilt_deg"] == 6 and face["crease_height_mm"] == 7
     with pytest.raises(purkinje.SceneError, match=r"eyes\[0\].face = \{\}: only used with eyelids"):
         build_remote_like(face={})
+    lashed = build_remote_like(eyelids={}, face={"lashes": {"albedo": 0.03, "upper_curl_deg": 60}})
+    lashes = json.loads(lashed.to_json())["eyes"][0]["face"]["lashes"]
+    assert lashes["albedo"] == 0.03 and lashes["upper_curl_deg"] == 60 and lashes["upper_length_mm"] == 9.5
 
 
 def test_keywords_are_checked_with_the_file_formats_messages():

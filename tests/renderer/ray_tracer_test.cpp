@@ -569,7 +569,8 @@ Hit follow_through(const RayTracer& tracer, const Ray& ray, bool lids, int trial
         EXPECT_FALSE(inside) << "trial " << trial << ": skin inside the eye";
         break;
       case Surface::mesh:
-        ADD_FAILURE() << "trial " << trial << ": these scenes have no meshes";
+      case Surface::lash:
+        ADD_FAILURE() << "trial " << trial << ": these scenes have no meshes or lashes";
         break;
       case Surface::none:
         break;
@@ -905,6 +906,27 @@ TEST(RayTracer, OccludedSeesEverySurfaceAndTheExceptionIgnoresOnlyTheCornea) {
   EXPECT_FALSE(tracer2.occluded_except_cornea(camera, in_stroma));
   EXPECT_FALSE(tracer2.occluded_except_cornea(camera, two_surface.pupil_center() + Vector3{0, 0, -0.01}));
   EXPECT_TRUE(tracer2.occluded(camera, two_surface.pupil_center() + Vector3{0, 0, -0.01}));
+}
+
+// What blocks a segment, nearest its `to` end (the labels' occluded_by):
+// a square mesh halfway to the eye, the eye's pupil disc behind its cornea.
+TEST(RayTracer, TheOccluderIsTheBlockerNearestTheSegmentsEnd) {
+  const Eye eye = facing_camera(keratometric_eye());
+  Scene scene = scene_of({eye});
+  Mesh square;
+  square.name = "square";
+  square.vertices = {{-10, -10, 300}, {10, -10, 300}, {10, 10, 300}, {-10, 10, 300}};
+  square.triangles = {{0, 1, 2}, {0, 2, 3}};
+  scene.meshes = {square};
+  const RayTracer tracer(scene);
+  const Point3 camera{0, 0, 0};
+  EXPECT_EQ(tracer.occluder_except_cornea(eye.rotation_center(), camera), Surface::mesh);
+  EXPECT_EQ(tracer.occluder_except_cornea(camera, eye.rotation_center()), Surface::pupil);
+  EXPECT_EQ(tracer.occluder_except_cornea(camera, {0, 0, 592.1}), Surface::mesh);
+  EXPECT_EQ(tracer.occluder_except_cornea({20, 0, 0}, {20, 0, 1000}), Surface::none);
+  // Only the cornea between: nothing.
+  EXPECT_EQ(tracer.occluder_except_cornea({0, 0, 400}, eye.pupil_center() + Vector3{0.5, 0, -0.01}), Surface::none);
+  EXPECT_EQ(tracer.occluder_except_cornea(camera, camera), Surface::none);
 }
 
 // ---------------------------------------------------------------------------

@@ -66,6 +66,54 @@ enum class EyeSide { right, left };
 // As scene files and labels spell it.
 constexpr const char* to_string(EyeSide side) { return side == EyeSide::right ? "right" : "left"; }
 
+// Eyelashes along a face's lid margins (docs/scene-format.md: lashes).
+// Each lash is a tapering hair rooted on the lid's anterior margin: it
+// leaves along the lid's outward normal tipped by root_deg toward the
+// opening, then bends away from the opening by curl_deg in all, in the
+// plane of that normal and the lid's rise. Lashes are sparser and shorter
+// toward the canthi and absent medial to the lacrimal punctum; each is
+// jittered in place, length, direction and curl by a stream of `seed`.
+// Defaults from textbook anatomy of adult lashes: upper lid 100-150
+// lashes of 8-12 mm in 2-3 rows over about 25 mm of margin, rising at
+// 110-130 deg from the downward vertical with the eye open; lower lid 50-75
+// of 6-8 mm, bent forward and down; shafts about 0.1 mm thick at the root,
+// longest at the lid's middle, shortest at the medial canthus. Albedo: a
+// guess (no NIR measurement of lashes found): melanin absorbs less at
+// 850 nm than in the visible, so dark lashes are not black there; mascara
+// (carbon black) darkens them.
+struct Lashes {
+  double upper_per_mm = 4.5;    // lashes per mm of the upper margin's lashed part
+  double lower_per_mm = 3.0;
+  double upper_length_mm = 9.5;  // at the middle of the lid; shorter toward the canthi
+  double lower_length_mm = 6.5;
+  double upper_curl_deg = 45;    // total bend, root to tip, away from the opening
+  double lower_curl_deg = 20;
+  double root_deg = 20;          // the root's tilt from the lid's normal toward the opening
+  double thickness_mm = 0.1;     // diameter at the root; a third of it at the tip
+  double albedo = 0.1;
+  std::uint64_t seed = 1;
+};
+
+// Lashes' numbers by their names in scene files ("lashes": {...}) and, with
+// "lash_" before them, in data sets; bounds as FaceKey's.
+struct LashKey {
+  std::string_view name;
+  double Lashes::*member;
+  double low;
+  double high;
+};
+inline constexpr std::array<LashKey, 9> kLashKeys{{
+    {"upper_per_mm", &Lashes::upper_per_mm, 0, 10},
+    {"lower_per_mm", &Lashes::lower_per_mm, 0, 10},
+    {"upper_length_mm", &Lashes::upper_length_mm, 1, 15},
+    {"lower_length_mm", &Lashes::lower_length_mm, 1, 15},
+    {"upper_curl_deg", &Lashes::upper_curl_deg, -30, 120},
+    {"lower_curl_deg", &Lashes::lower_curl_deg, -30, 120},
+    {"root_deg", &Lashes::root_deg, -45, 60},
+    {"thickness_mm", &Lashes::thickness_mm, 0.02, 0.3},
+    {"albedo", &Lashes::albedo, 0, 1},
+}};
+
 // The periocular region as a face (docs/scene-format.md: face): in place
 // of the lid sphere and the flat wall, the renderer builds a skin surface
 // per eye from these numbers and the lids' margins (Eyelids): lids that lie
@@ -96,6 +144,8 @@ struct Face {
   // From the centre of rotation to the face's midline (half the
   // interpupillary distance): the nose's ridge.
   double midline_mm = 31.5;
+  // Absent: no lashes.
+  std::optional<Lashes> lashes;
 };
 
 // Face's lengths and angles by their names in scene files and data sets,

@@ -18,9 +18,18 @@ struct Ellipse {
   double angle_rad = 0;       // of semi-axis 1 from +u toward +v, in (-pi/2, pi/2]
 };
 
+// What hides a point (status occluded): the lids and the skin around
+// them, an eyelash, one of the scene's meshes (glasses, occluders), or an
+// eye's own surfaces met off the point's path (a sclera, an iris).
+enum class Occluder { none, skin, lash, mesh, eye };
+const char* to_string(Occluder o);
+
 struct GlintTruth {
   int illuminator = 0;
   PathStatus status = PathStatus::no_solution;
+  // For status occluded: what the camera sees in front of the glint, or
+  // else what shadows it from its light.
+  Occluder occluder = Occluder::none;
   Pixel pixel;               // valid when status is ok or outside_image
   Reflection reflection;     // 3D point, normal, directions, incidence, on_cap
 };
@@ -29,6 +38,7 @@ struct PupilBorderPointTruth {
   double angle_rad = 0;      // around the pupil, from eye +x toward eye +y
   Point3 border_point;       // the 3D point on the pupil's edge
   PathStatus status = PathStatus::no_solution;
+  Occluder occluder = Occluder::none;  // for status occluded: what the camera sees in front of it
   Pixel pixel;
   Refraction refraction;
 };
@@ -77,10 +87,11 @@ struct SceneTruth {
   std::vector<EyeInCameraTruth> views;  // camera-major: (camera 0, eye 0), (camera 0, eye 1), ...
 };
 
-// Whether anything of the scene as rendered (lids, skin, meshes; not the
+// What of the scene as rendered (lids, skin, lashes, meshes; not the
 // cornea, whose paths the solver has already followed) blocks the straight
-// path between two points. The renderer's ray tracer supplies it.
-using Occlusion = std::function<bool(const Point3& from, const Point3& to)>;
+// path between two points: the blocker nearest `to`, or Occluder::none.
+// The renderer's ray tracer supplies it.
+using Occlusion = std::function<Occluder(const Point3& from, const Point3& to)>;
 
 struct TruthOptions {
   int pupil_border_points = 36;

@@ -12,7 +12,9 @@
 // the gap to the cornea's edge) and, when the eye has eyelids, the lids
 // (a sphere about the centre of rotation, minus the palpebral opening) and
 // the skin around them (a plane facing forward with a hole for the lids,
-// and the rest of the lid sphere behind it as the eye's socket). Each of
+// and the rest of the lid sphere behind it as the eye's socket), or the
+// face's mesh in their place with its lashes (chains of capsules, one
+// user primitive each, also intersected in double precision). Each of
 // the scene's meshes is an Embree triangle geometry whose hits are
 // recomputed in double precision from the mesh's own vertices.
 // Geometry is documented in src/scene_geometry.h, precision in
@@ -38,6 +40,7 @@ enum class Surface : unsigned char {
   cornea_anterior,
   cornea_posterior,
   mesh,      // a triangle of one of the scene's meshes
+  lash,      // one of an eye's eyelashes
 };
 const char* to_string(Surface s);
 
@@ -52,11 +55,11 @@ struct Hit {
   Surface surface = Surface::none;
   int eye = -1;             // index into scene.eyes (-1 for Surface::mesh)
   int mesh = -1;            // index into scene.meshes (Surface::mesh only)
-  int triangle = -1;        // index into that mesh's (or face's) triangles
+  int triangle = -1;        // index into that mesh's (or face's) triangles, or the lashes' capsules
   double t = 0;             // distance along the ray, mm
   Point3 point;             // world, recomputed in double precision
   // Outward: out of the eye; toward the front for skin and iris; for a
-  // mesh, the triangle's front, (v1 - v0) x (v2 - v0).
+  // mesh, the triangle's front, (v1 - v0) x (v2 - v0); out of a lash.
   UnitVector3 normal = UnitVector3::unit_z();
   bool front_face = true;   // the ray meets the side `normal` points to
 };
@@ -112,6 +115,9 @@ class RayTracer {
   // As occluded(), ignoring the anterior and posterior cornea (for a path
   // whose refraction the caller handles, e.g. from a light to the cornea).
   bool occluded_except_cornea(const Point3& from, const Point3& to) const;
+  // What occluded_except_cornea() finds, nearest `to`: Surface::none when
+  // nothing blocks the segment.
+  Surface occluder_except_cornea(const Point3& from, const Point3& to) const;
 
  private:
   struct Impl;

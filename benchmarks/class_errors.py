@@ -4,10 +4,11 @@ fast - reference over the reference's mean (a bias) and the RMS of it (per
 pixel), glint pixels left out, and the image's relative error as the render
 benchmarks define it (RMSE over the mean of non-zero reference pixels).
 
-    PYTHONPATH=build/release/python python3 benchmarks/class_errors.py SCENE [--rays 256] [--face]
+    PYTHONPATH=build/release/python python3 benchmarks/class_errors.py SCENE [--rays 256] [--face] [--lashes]
 
 --face gives every eye of the scene a periocular face with every default, as
-BM_RenderHeadsetFace does.
+BM_RenderHeadsetFace does; --lashes gives that face default lashes
+(BM_RenderHeadsetFaceLashes).
 """
 
 import argparse
@@ -17,7 +18,7 @@ import numpy as np
 
 import purkinje
 
-CLASSES = ["background", "skin", "sclera", "iris", "pupil"]
+CLASSES = ["background", "skin", "sclera", "iris", "pupil", "lash"]
 
 
 def main():
@@ -27,6 +28,7 @@ def main():
     parser.add_argument("--photons", type=int, default=1 << 22, help="reference photons per light")
     parser.add_argument("--edge-rays", type=int, default=10, help="fast mode's edge rays")
     parser.add_argument("--face", action="store_true")
+    parser.add_argument("--lashes", action="store_true", help="with --face: default lashes too")
     args = parser.parse_args()
 
     scene = purkinje.load_scene(args.scene)
@@ -35,7 +37,7 @@ def main():
             parser.error("--face gives one eye a right-side face: the scene must have one eye")
         d = json.loads(scene.to_json())
         for eye in d["eyes"]:
-            eye["face"] = {}
+            eye["face"] = {"lashes": {}} if args.lashes else {}
         scene = purkinje.parse_scene(d, name=args.scene)
     fast = purkinje.render(scene, samples_per_pixel=1, edge_samples_per_pixel=args.edge_rays, noise=False)
     reference = purkinje.render(scene, mode="reference", samples_per_pixel=args.rays, edge_samples_per_pixel=0,

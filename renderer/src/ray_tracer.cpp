@@ -62,6 +62,13 @@ namespace {
 
 constexpr unsigned kCorneaMask = 1u;
 constexpr unsigned kOtherMask = 2u;
+constexpr unsigned kLashMask = 4u;
+
+// Which surfaces a query skips.
+struct Skip {
+  bool cornea = false;
+  bool lashes = false;
+};
 
 // Embree hands the context pointer back to the callbacks, so extending it
 // carries the double rays to them (the Embree 3 idiom; Embree 4 keeps it
@@ -69,7 +76,7 @@ constexpr unsigned kOtherMask = 2u;
 struct Query {
   RTCIntersectContext embree;
   Lane* lanes = nullptr;
-  bool skip_cornea = false;
+  Skip skip;
 };
 static_assert(std::is_standard_layout_v<Query> && offsetof(Query, embree) == 0);
 
@@ -117,7 +124,7 @@ void bounds_callback(const RTCBoundsFunctionArguments* args) {
 void intersect_callback(const RTCIntersectFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
   const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
-  if (query->skip_cornea && surface.is_cornea()) return;
+  if (query->skip.cornea && surface.is_cornea()) return;
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
   RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
   for (unsigned i = 0; i < args->N; ++i) {
@@ -146,7 +153,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
 void occluded_callback(const RTCOccludedFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
   const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
-  if (query->skip_cornea && surface.is_cornea()) return;
+  if (query->skip.cornea && surface.is_cornea()) return;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
@@ -213,6 +220,7 @@ void lash_bounds_callback(const RTCBoundsFunctionArguments* args) {
 
 void lash_intersect_callback(const RTCIntersectFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
+  if (query->skip.lashes) return;
   const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
   RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
@@ -240,6 +248,7 @@ void lash_intersect_callback(const RTCIntersectFunctionNArguments* args) {
 
 void lash_occluded_callback(const RTCOccludedFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
+  if (query->skip.lashes) return;
   const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
@@ -296,6 +305,8 @@ inline void check_ray(const Point3& origin, const Vector3& direction, double t_m
 struct RayTracer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  RTCScene lash_scene = nullptr;  // the lashes alone (occluded_by_lashes); none without lashes
+  Box lash_bounds{{0, 0, 0}, {0, 0, 0}};  // of every lash, padded
   SurfaceList surfaces;
   std::vector<std::unique_ptr<PlacedMesh>> meshes;
   std::vector<std::unique_ptr<PlacedLashes>> lashes;
@@ -309,6 +320,7 @@ struct RayTracer::Impl {
   std::string error_message;
 
   ~Impl() {
+    if (lash_scene) rtcReleaseScene(lash_scene);
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
   }
@@ -352,7 +364,8 @@ struct RayTracer::Impl {
 
   // Runs the query on `lane`, whose `surface` is left null when nothing is hit.
   template <bool kOcclusion>
-  void run(Lane& lane, bool skip_cornea) const {
+  // On `in`, the whole scene unless given (the lashes' own scene).
+  void run(Lane& lane, Skip skip, RTCScene in = nullptr) const {
     Point3 start;
     float tfar = 0;
     if (!start_float_ray(lane, start, tfar)) return;
@@ -360,7 +373,7 @@ struct RayTracer::Impl {
     Query query;
     rtcInitIntersectContext(&query.embree);
     query.lanes = &lane;
-    query.skip_cornea = skip_cornea;
+    query.skip = skip;
 
     RTCRayHit rayhit{};  // every field written: Embree is given no uninitialised data
     RTCRay& ray = rayhit.ray;
@@ -373,15 +386,17 @@ struct RayTracer::Impl {
     ray.dir_z = static_cast<float>(lane.direction.z);
     ray.time = 0.0f;
     ray.tfar = tfar;
-    ray.mask = skip_cornea && masks ? kOtherMask : ~0u;
+    ray.mask = ~0u;
+    if (masks && skip.cornea) ray.mask &= ~kCorneaMask;
+    if (masks && skip.lashes) ray.mask &= ~kLashMask;
     ray.id = 0;  // the lane
     ray.flags = 0;
     if constexpr (kOcclusion) {
-      rtcOccluded1(scene, &query.embree, &ray);
+      rtcOccluded1(in ? in : scene, &query.embree, &ray);
     } else {
       rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(scene, &query.embree, &rayhit);
+      rtcIntersect1(in ? in : scene, &query.embree, &rayhit);
     }
   }
 
@@ -454,18 +469,18 @@ struct RayTracer::Impl {
     return true;
   }
 
-  bool occluded(const Point3& from, const Point3& to, bool skip_cornea) const {
+  bool occluded(const Point3& from, const Point3& to, Skip skip, RTCScene in = nullptr) const {
     Lane lane;
     if (!segment_lane(from, to, lane)) return false;
-    run<true>(lane, skip_cornea);
+    run<true>(lane, skip, in);
     return lane.found();
   }
 
   // The closest hit from `to` back toward `from`.
-  Surface occluder(const Point3& from, const Point3& to, bool skip_cornea) const {
+  Surface occluder(const Point3& from, const Point3& to, Skip skip) const {
     Lane lane;
     if (!segment_lane(to, from, lane)) return Surface::none;
-    run<false>(lane, skip_cornea);
+    run<false>(lane, skip);
     return lane.surface ? lane.surface->kind() : lane.mesh ? lane.mesh->kind() : lane.lashes ? Surface::lash : Surface::none;
   }
 
@@ -557,20 +572,36 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
                  std::max(bounds.hi.z, b.hi.z)};
   }
+  if (!impl.lashes.empty()) {
+    impl.lash_scene = rtcNewScene(impl.device);
+    impl.check("creating the lashes' scene");
+    rtcSetSceneFlags(impl.lash_scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl.lash_scene, RTC_BUILD_QUALITY_HIGH);
+  }
   for (const auto& lashes : impl.lashes) {
-    RTCGeometry geometry = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_USER);
-    impl.check("creating a user geometry");
-    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(lashes->segments().size()));
-    rtcSetGeometryUserData(geometry, lashes.get());
-    rtcSetGeometryBoundsFunction(geometry, &lash_bounds_callback, nullptr);
-    rtcSetGeometryIntersectFunction(geometry, &lash_intersect_callback);
-    rtcSetGeometryOccludedFunction(geometry, &lash_occluded_callback);
-    if (impl.masks) rtcSetGeometryMask(geometry, kOtherMask);
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(impl.scene, geometry);
-    rtcReleaseGeometry(geometry);
-    impl.check("adding lashes");
+    // In the whole scene and in the lashes' own (a geometry can be
+    // attached to one scene only: two geometries share the capsules).
+    for (RTCScene in : {impl.scene, impl.lash_scene}) {
+      RTCGeometry geometry = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_USER);
+      impl.check("creating a user geometry");
+      rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(lashes->segments().size()));
+      rtcSetGeometryUserData(geometry, lashes.get());
+      rtcSetGeometryBoundsFunction(geometry, &lash_bounds_callback, nullptr);
+      rtcSetGeometryIntersectFunction(geometry, &lash_intersect_callback);
+      rtcSetGeometryOccludedFunction(geometry, &lash_occluded_callback);
+      if (impl.masks) rtcSetGeometryMask(geometry, kLashMask);
+      rtcCommitGeometry(geometry);
+      rtcAttachGeometry(in, geometry);
+      rtcReleaseGeometry(geometry);
+      impl.check("adding lashes");
+    }
     const Box b = lashes->world_bounds();
+    impl.lash_bounds = impl.lash_scene && &lashes == &impl.lashes.front()
+                           ? b
+                           : Box{{std::min(impl.lash_bounds.lo.x, b.lo.x), std::min(impl.lash_bounds.lo.y, b.lo.y),
+                                  std::min(impl.lash_bounds.lo.z, b.lo.z)},
+                                 {std::max(impl.lash_bounds.hi.x, b.hi.x), std::max(impl.lash_bounds.hi.y, b.hi.y),
+                                  std::max(impl.lash_bounds.hi.z, b.hi.z)}};
     bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
                  std::min(bounds.lo.z, b.lo.z)};
     bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
@@ -578,6 +609,10 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   }
   rtcCommitScene(impl.scene);
   impl.check("building the scene");
+  if (impl.lash_scene) {
+    rtcCommitScene(impl.lash_scene);
+    impl.check("building the lashes' scene");
+  }
   impl.empty = impl.surfaces.empty() && impl.meshes.empty() && impl.lashes.empty();
   if (!impl.empty) {
     // A margin more, so that a float ray starting on this box starts
@@ -596,7 +631,7 @@ Hit RayTracer::intersect(const Ray& ray) const {
   check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
   if (!(ray.t_min < ray.t_max)) return {};
   Lane lane = lane_of(ray);
-  impl_->run<false>(lane, false);
+  impl_->run<false>(lane, {});
   return hit_of(ray, lane);
 }
 
@@ -619,7 +654,7 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
     if (count < kMinPacket) {
       // A packet this thin costs more than its rays one by one.
       for (std::size_t i = 0; i < count; ++i) {
-        if (rays[first + i].t_min < rays[first + i].t_max) impl_->run<false>(lanes[i], false);
+        if (rays[first + i].t_min < rays[first + i].t_max) impl_->run<false>(lanes[i], {});
       }
     } else {
       impl_->run_packet(lanes, count);
@@ -629,15 +664,46 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
 }
 
 bool RayTracer::occluded(const Point3& from, const Point3& to) const {
-  return impl_->occluded(from, to, false);
+  return impl_->occluded(from, to, {});
 }
 
 bool RayTracer::occluded_except_cornea(const Point3& from, const Point3& to) const {
-  return impl_->occluded(from, to, true);
+  return impl_->occluded(from, to, {.cornea = true});
 }
 
 Surface RayTracer::occluder_except_cornea(const Point3& from, const Point3& to) const {
-  return impl_->occluder(from, to, true);
+  return impl_->occluder(from, to, {.cornea = true});
+}
+
+bool RayTracer::has_lashes() const { return impl_->lash_scene != nullptr; }
+
+Hit RayTracer::intersect_except_lashes(const Ray& ray) const {
+  check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
+  if (!(ray.t_min < ray.t_max)) return {};
+  Lane lane = lane_of(ray);
+  impl_->run<false>(lane, {.lashes = true});
+  return hit_of(ray, lane);
+}
+
+bool RayTracer::occluded_except_lashes(const Point3& from, const Point3& to) const {
+  return impl_->occluded(from, to, {.lashes = true});
+}
+
+bool RayTracer::occluded_by_lashes(const Point3& from, const Point3& to) const {
+  if (!impl_->lash_scene) {
+    check_ray(from, to - from, 0, 0);
+    check_ray(to, to - from, 0, 0);
+    return false;
+  }
+  // Most shadow rays pass far from the lashes: a box test is cheaper than
+  // Embree's query.
+  double t0 = 0, t1 = 1;
+  if (!clip_to_box(impl_->lash_bounds, from, to - from, t0, t1)) {
+    check_ray(from, to - from, 0, 0);
+    check_ray(to, to - from, 0, 0);
+    return false;
+  }
+  return impl_->occluded(from, to, {}, impl_->lash_scene);
 }
 
 }  // namespace purkinje::renderer

@@ -6,15 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include "purkinje/models/dataset_spec.h"
-#include "purkinje/models/scene_file.h"
 
 namespace purkinje {
 namespace {
@@ -324,23 +321,13 @@ TEST(DatasetSpec, TheFaceParametersReachTheFirstEyesFaceOnly) {
 }
 
 TEST(DatasetSpec, TheLashParametersReachTheFirstEyesLashes) {
-  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "lash_spec";
-  std::filesystem::create_directories(folder);
-  {
-    // The bundled face with lashes on its first eye.
-    Scene lashed = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote_face.json");
-    EyeAppearance look = lashed.eyes[0].appearance();
-    look.face->lashes = Lashes{};
-    lashed.eyes[0].set_appearance(look);
-    std::ofstream(folder / "lashed.json") << scene_to_json(lashed);
-  }
-  const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "lashed.json", "count": 10,
+  const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/remote_face.json", "count": 10,
       "parameters": {"lash_upper_per_mm": {"uniform": [2, 6]}, "lash_lower_per_mm": {"uniform": [0, 4]},
       "lash_upper_length_mm": {"uniform": [7, 12]}, "lash_lower_length_mm": {"uniform": [5, 8]},
       "lash_upper_curl_deg": {"uniform": [10, 70]}, "lash_lower_curl_deg": {"uniform": [0, 40]},
       "lash_root_deg": {"uniform": [0, 40]}, "lash_thickness_mm": {"uniform": [0.06, 0.15]},
       "lash_albedo": {"choice": [0.03, 0.1]}, "lash_seed": {"choice": [3, 4]}}})",
-                                              "f.json", folder);
+                                              "f.json", kFolder);
   for (std::uint64_t k : {0u, 7u}) {
     const ImageDraw d = draw_image(spec, k);
     const Lashes& lashes = *scene_for_image(spec, d).eyes[0].appearance().face->lashes;
@@ -348,6 +335,8 @@ TEST(DatasetSpec, TheLashParametersReachTheFirstEyesLashes) {
       EXPECT_EQ(lashes.*key.member, column(spec, d, "lash_" + std::string(key.name))) << key.name;
     }
     EXPECT_EQ(static_cast<double>(lashes.seed), column(spec, d, "lash_seed"));
+    // The other eye's lashes stay as the scene has them.
+    EXPECT_EQ(scene_for_image(spec, d).eyes[1].appearance().face->lashes->seed, 2u);
   }
 }
 

@@ -6,11 +6,14 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "lashes.h"
 #include "purkinje/models/eye.h"
+#include "purkinje/models/scene_file.h"
 #include "purkinje/models/scene.h"
 #include "purkinje/renderer/ray_tracer.h"
+#include "purkinje/renderer/render.h"
 #include "scene_geometry.h"
 
 namespace purkinje::renderer {
@@ -193,6 +196,81 @@ TEST(Lashes, AFacesLashesStandAboveItsMarginsAndFollowTheLid) {
   // 14 sin(20 deg) = 4.8 mm, and its lashes with it: more lashes high up.
   const RayTracer up(lashed_face(20));
   EXPECT_GT(lash_share(up, 10, 13), lash_share(level, 10, 13) + 0.05);
+}
+
+// The fast mode's queries: seen through the lashes, or the lashes alone.
+TEST(Lashes, QueriesCanLookThroughTheLashesOrAtThemAlone) {
+  const RayTracer tracer(lashed_face(0));
+  ASSERT_TRUE(tracer.has_lashes());
+  Ray ray;
+  ray.direction = -UnitVector3::unit_z();
+  Hit hit;
+  for (double x = 0; x < 3 && hit.surface != Surface::lash; x += 0.01) {
+    ray.origin = {x, 7, 100};
+    hit = tracer.intersect(ray);
+  }
+  ASSERT_EQ(hit.surface, Surface::lash);
+  const Hit behind = tracer.intersect_except_lashes(ray);
+  EXPECT_EQ(behind.surface, Surface::skin);
+  EXPECT_GT(behind.t, hit.t);
+  // A segment from in front of the lash to just in front of the skin
+  // behind it: only the lash blocks it.
+  const Point3 front = ray.origin;
+  const Point3 near_skin = behind.point + Vector3{0, 0, 0.01};
+  EXPECT_TRUE(tracer.occluded(front, near_skin));
+  EXPECT_TRUE(tracer.occluded_by_lashes(front, near_skin));
+  EXPECT_FALSE(tracer.occluded_except_lashes(front, near_skin));
+  // Through the skin as well: blocked with or without the lashes.
+  EXPECT_TRUE(tracer.occluded_except_lashes(front, behind.point - Vector3{0, 0, 1}));
+  // Without lashes nothing is a lash.
+  Scene bare = lashed_face(0);
+  EyeAppearance look = bare.eyes[0].appearance();
+  look.face->lashes.reset();
+  bare.eyes[0].set_appearance(look);
+  const RayTracer plain(bare);
+  EXPECT_FALSE(plain.has_lashes());
+  EXPECT_FALSE(plain.occluded_by_lashes(front, near_skin));
+  EXPECT_EQ(plain.intersect(ray).surface, Surface::skin);
+}
+
+// The fast mode's visibility cache interpolates shadows between nodes
+// that look through the lashes; the lashes' own thin shadows are traced
+// per sample. On the headset's upper lid, under its lashes' shadows, the
+// fast mode's skin agrees with the reference's on average (measured:
+// -0.4%; +7.3% with the lashes' shadows left to the cache).
+TEST(Lashes, TheFastModeCastsTheLashesShadowsAsTheReferenceDoes) {
+  Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/headset.json");
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.face = Face{};
+  look.face->lashes = Lashes{};
+  scene.eyes[0].set_appearance(look);
+  RenderOptions options;
+  options.noise = false;
+  options.edge_samples_per_pixel = 0;
+  options.region = PixelRegion{140, 90, 260, 150};
+  options.samples_per_pixel = 16;
+  const RenderResult fast = render(scene, 0, options);
+  options.mode = RenderMode::reference;
+  options.samples_per_pixel = 64;
+  options.seed = 3;
+  const RenderResult reference = render(scene, 0, options);
+  const ImagePlane* id = nullptr;
+  for (const NamedPlane& p : reference.aovs) {
+    if (p.name == "id") id = &p.plane;
+  }
+  ASSERT_NE(id, nullptr);
+  double f = 0, g = 0;
+  int skin = 0;
+  for (int y = 90; y < 150; ++y) {
+    for (int x = 140; x < 260; ++x) {
+      if (id->at(x, y) != static_cast<float>(PixelClass::skin)) continue;
+      f += fast.electrons.at(x, y);
+      g += reference.electrons.at(x, y);
+      ++skin;
+    }
+  }
+  ASSERT_GT(skin, 3000);
+  EXPECT_NEAR(f / g, 1.0, 0.02);
 }
 
 }  // namespace

@@ -766,7 +766,7 @@ TEST(RenderPupil, RandomLashedFaceScenesOcclusionFlagsMatchTheImage) {
         e.center.v + r > camera.intrinsics().height - 3) {
       continue;
     }
-    const RenderedPupil rendered = render_pupil(scene, geometric, 16);
+    const RenderedPupil rendered = render_pupil(scene, geometric, 8);
     const PupilTruth& pupil = rendered.result.truth.views[0].pupil;
     const ImagePlane& skin = aov(rendered.result, "skin");
     const ImagePlane& lash = aov(rendered.result, "lash");

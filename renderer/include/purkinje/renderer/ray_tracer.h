@@ -119,6 +119,16 @@ class RayTracer {
   // nothing blocks the segment.
   Surface occluder_except_cornea(const Point3& from, const Point3& to) const;
 
+  // Lashes: thin and many, they are left to the samples by the fast
+  // mode's screen-space caches, which interpolate the rest.
+  bool has_lashes() const;
+  // As intersect() and occluded(), ignoring the lashes.
+  Hit intersect_except_lashes(const Ray& ray) const;
+  bool occluded_except_lashes(const Point3& from, const Point3& to) const;
+  // Whether a lash lies on the segment (as occluded() trims it), tested
+  // against the lashes alone.
+  bool occluded_by_lashes(const Point3& from, const Point3& to) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

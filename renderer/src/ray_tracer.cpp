@@ -262,6 +262,11 @@ void lash_occluded_callback(const RTCOccludedFunctionNArguments* args) {
   }
 }
 
+Box united(const Box& a, const Box& b) {
+  return {{std::min(a.lo.x, b.lo.x), std::min(a.lo.y, b.lo.y), std::min(a.lo.z, b.lo.z)},
+          {std::max(a.hi.x, b.hi.x), std::max(a.hi.y, b.hi.y), std::max(a.hi.z, b.hi.z)}};
+}
+
 // Clips the ray's [t0, t1] to a box; false when they do not meet.
 bool clip_to_box(const Box& box, const Point3& o, const Vector3& d, double& t0, double& t1) {
   for (int axis = 0; axis < 3; ++axis) {
@@ -559,18 +564,12 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     impl.check("adding a surface");
 
     const Box b = surface->world_bounds();
-    bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
-                 std::min(bounds.lo.z, b.lo.z)};
-    bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
-                 std::max(bounds.hi.z, b.hi.z)};
+    bounds = united(bounds, b);
   }
   for (const auto& mesh : impl.meshes) {
     impl.add_mesh(*mesh);
     const Box b = mesh->world_bounds();
-    bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
-                 std::min(bounds.lo.z, b.lo.z)};
-    bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
-                 std::max(bounds.hi.z, b.hi.z)};
+    bounds = united(bounds, b);
   }
   if (!impl.lashes.empty()) {
     impl.lash_scene = rtcNewScene(impl.device);
@@ -596,16 +595,8 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
       impl.check("adding lashes");
     }
     const Box b = lashes->world_bounds();
-    impl.lash_bounds = impl.lash_scene && &lashes == &impl.lashes.front()
-                           ? b
-                           : Box{{std::min(impl.lash_bounds.lo.x, b.lo.x), std::min(impl.lash_bounds.lo.y, b.lo.y),
-                                  std::min(impl.lash_bounds.lo.z, b.lo.z)},
-                                 {std::max(impl.lash_bounds.hi.x, b.hi.x), std::max(impl.lash_bounds.hi.y, b.hi.y),
-                                  std::max(impl.lash_bounds.hi.z, b.hi.z)}};
-    bounds.lo = {std::min(bounds.lo.x, b.lo.x), std::min(bounds.lo.y, b.lo.y),
-                 std::min(bounds.lo.z, b.lo.z)};
-    bounds.hi = {std::max(bounds.hi.x, b.hi.x), std::max(bounds.hi.y, b.hi.y),
-                 std::max(bounds.hi.z, b.hi.z)};
+    impl.lash_bounds = &lashes == &impl.lashes.front() ? b : united(impl.lash_bounds, b);
+    bounds = united(bounds, b);
   }
   rtcCommitScene(impl.scene);
   impl.check("building the scene");

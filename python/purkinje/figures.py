@@ -4,7 +4,9 @@ from the files the studies write (docs/compare.md says why matplotlib).
 `purkinje calibrate` and `purkinje compare` run this module after writing
 their data: ``python3 -m purkinje.figures calibration|compare|sweep
 FOLDER``. From Python, `calibration_figures(folder)`,
-`compare_figures(folder)` and `sweep_figures(folder)` draw the same. Every arrow panel has its own scale, given by a key arrow
+`compare_figures(folder)` and `sweep_figures(folder)` draw the same;
+`draw_labels(ax, view)` draws an image's labels over it (the gallery in
+docs/rendering.md). Every arrow panel has its own scale, given by a key arrow
 in the panel and written, with each panel's colour range, to
 ``figures.json`` beside the figures, so that a test (or a reader) can
 check what a figure shows.
@@ -438,6 +440,58 @@ def sweep_figures(folder: PathLike) -> List[Path]:
              "![sweep.png](sweep.png)", ""]
     _atomically(folder / "index.md", lambda t: t.write_text("\n".join(lines)))
     return [folder / "sweep.png", folder / "figures.json", folder / "index.md"]
+
+
+# What the overlay draws, by a feature's status and what hid it.
+_OVERLAY = {
+    "ok": ("#33ff33", "seen"),
+    "skin": ("#ff9900", "hidden by skin"),
+    "lash": ("#ff33ff", "hidden by a lash"),
+    "mesh": ("#3399ff", "hidden by a mesh"),
+    "eye": ("#ff3333", "hidden by the eye"),
+}
+
+
+def draw_labels(ax, view, origin: Tuple[float, float] = (0.0, 0.0), scale: float = 1.0) -> Dict[str, int]:
+    """Draws one view's labels (a `View` of `Labels`) on an axes showing its
+    image: each glint as a +, each pupil-border point as a dot, coloured by
+    status (seen; hidden by skin, a lash, a mesh or the eye: `occluded_by`),
+    the whole pupil's ellipse dashed and its refracted centre as an x.
+    `origin` and `scale` map pixels into the axes' coordinates (a crop's
+    corner, a zoom), with pixel centres at integers as the labels have them.
+    Returns how many features of each kind it drew (for a caption or a
+    test)."""
+    from matplotlib.patches import Ellipse as EllipsePatch
+
+    def at(u: float, v: float) -> Tuple[float, float]:
+        return (u - origin[0]) * scale, (v - origin[1]) * scale
+
+    drawn: Dict[str, int] = {}
+
+    def colour(status: str, occluded_by: Optional[str]) -> Optional[str]:
+        key = occluded_by if status == "occluded" else status
+        if key not in _OVERLAY:
+            return None  # no pixel, or one outside the image
+        drawn[key] = drawn.get(key, 0) + 1
+        return _OVERLAY[key][0]
+
+    for g in view.glints:
+        c = colour(g.status, g.occluded_by)
+        if c and g.u_px is not None:
+            ax.plot(*at(g.u_px, g.v_px), marker="+", color=c, markersize=9, mew=1.5)
+    for p in view.pupil.border:
+        c = colour(p.status, p.occluded_by)
+        if c and p.u_px is not None:
+            ax.plot(*at(p.u_px, p.v_px), marker="o", color=c, markersize=2.5, linestyle="none")
+    e = view.pupil.ellipse
+    if e is not None:
+        ax.add_patch(EllipsePatch(at(e.center_u_px, e.center_v_px), 2 * e.semi_axis_1_px * scale,
+                                  2 * e.semi_axis_2_px * scale, angle=e.angle_deg, fill=False,
+                                  edgecolor="#ffff00", linestyle="--", linewidth=0.8))
+    c = view.pupil.refracted_center
+    if c.u_px is not None:
+        ax.plot(*at(c.u_px, c.v_px), marker="x", color="#ffff00", markersize=6)
+    return drawn
 
 
 def main(argv: Sequence[str]) -> int:

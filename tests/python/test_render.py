@@ -151,9 +151,21 @@ def test_lashes_are_a_class_and_labels_say_what_hides_a_point():
     d["eyes"][0]["face"] = {"lashes": {}}
     result = purkinje.render(purkinje.parse_scene(d))
     assert (result.segmentation == 5).any()
-    border = result.labels.views[0].pupil.border
+    view = result.labels.views[0]
+    border = view.pupil.border
     assert all(p.occluded_by is None for p in border if p.status != "occluded")
     assert {p.occluded_by for p in border if p.status == "occluded"} == {"skin", "lash"}
+    # The gallery's overlay draws every feature with a pixel, by what hid it.
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from purkinje.figures import draw_labels
+    fig, ax = plt.subplots()
+    drawn = draw_labels(ax, view)
+    plt.close(fig)
+    features = view.glints + border
+    for key in ("ok", "skin", "lash"):
+        assert drawn.get(key, 0) == sum(1 for f in features if (f.occluded_by or f.status) == key), key
 
 
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 import purkinje
-from purkinje.figures import _OVERLAY, _pyplot, draw_labels
+from purkinje.figures import LABEL_COLOURS, draw_labels
 
 HERE = Path(__file__).resolve().parent
 SCENES = HERE.parent.parent / "assets" / "scenes"
@@ -84,7 +84,11 @@ def entries():
 
 
 def draw(stem, caption, d, half, out):
-    plt = _pyplot()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     result = purkinje.render(purkinje.parse_scene(d, name=stem))
     image = np.asarray(result.image, dtype=float)
     labels = result.labels
@@ -111,7 +115,7 @@ def draw(stem, caption, d, half, out):
     ax.axis("off")
     fig.savefig(out / f"{stem}.png", dpi=100)
     plt.close(fig)
-    seen = ", ".join(f"{n} {_OVERLAY[k][1]}" for k, n in sorted(counts.items()))
+    seen = ", ".join(f"{n} {LABEL_COLOURS[k][1]}" for k, n in sorted(counts.items()))
     return f"| ![{stem}](gallery/{stem}.png) | {caption}. Features: {seen}. |"
 
 

@@ -37,11 +37,14 @@ json point(const Point3& p) { return triple(p.x, p.y, p.z); }
 json vector(const Vector3& v) { return triple(v.x, v.y, v.z); }
 
 // Pixel validity by status. truth.cpp fills the pixel of an off_cornea path
-// too, unless the point is behind the camera, which only the camera knows.
+// too, unless the point is behind the camera, which only the camera knows;
+// an occluded point was ok before something hid it, so its pixel is where
+// it would be seen.
 bool pixel_valid(PathStatus status, const Camera& camera, const Point3& surface_point) {
   switch (status) {
     case PathStatus::ok:
-    case PathStatus::outside_image: return true;
+    case PathStatus::outside_image:
+    case PathStatus::occluded: return true;
     case PathStatus::off_cornea:
       return camera.project(surface_point).status != ProjectionStatus::behind_camera;
     default: return false;
@@ -222,6 +225,7 @@ json pupil_json(const PupilTruth& p, const Camera& camera) {
   out["visible_ellipse"] = ellipse_json(p.visible_ellipse_valid, p.visible_ellipse);
   json centre = json::object();
   centre["status"] = to_string(p.refracted_center_status);
+  if (p.refracted_center_status == PathStatus::occluded) centre["occluded_by"] = to_string(p.refracted_center_occluder);
   pixel_fields(centre,
                path_valid(p.refracted_center_path.status) &&
                    pixel_valid(p.refracted_center_status, camera,

@@ -109,9 +109,11 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
       }
       const RefractedImage centre = image_through_cornea(eye, camera, eye.pupil_center());
       view.pupil.refracted_center_status = centre.status;
-      if (centre.status == PathStatus::ok && options.occluded &&
-          options.occluded(centre.path.anterior_point, camera.center()) != Occluder::none) {
-        view.pupil.refracted_center_status = PathStatus::occluded;
+      if (centre.status == PathStatus::ok && options.occluded) {
+        view.pupil.refracted_center_occluder = options.occluded(centre.path.anterior_point, camera.center());
+        if (view.pupil.refracted_center_occluder != Occluder::none) {
+          view.pupil.refracted_center_status = PathStatus::occluded;
+        }
       }
       view.pupil.refracted_center = centre.pixel;
       view.pupil.refracted_center_path = centre.path;

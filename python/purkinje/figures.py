@@ -442,8 +442,9 @@ def sweep_figures(folder: PathLike) -> List[Path]:
     return [folder / "sweep.png", folder / "figures.json", folder / "index.md"]
 
 
-# What the overlay draws, by a feature's status and what hid it.
-_OVERLAY = {
+#: draw_labels' colour and meaning of a feature, by its status ("ok") or
+#: what hid it (occluded_by).
+LABEL_COLOURS = {
     "ok": ("#33ff33", "seen"),
     "skin": ("#ff9900", "hidden by skin"),
     "lash": ("#ff33ff", "hidden by a lash"),
@@ -468,21 +469,17 @@ def draw_labels(ax, view, origin: Tuple[float, float] = (0.0, 0.0), scale: float
 
     drawn: Dict[str, int] = {}
 
-    def colour(status: str, occluded_by: Optional[str]) -> Optional[str]:
-        key = occluded_by if status == "occluded" else status
-        if key not in _OVERLAY:
-            return None  # no pixel, or one outside the image
+    def mark(feature, **style) -> None:
+        key = feature.occluded_by if feature.status == "occluded" else feature.status
+        if key not in LABEL_COLOURS or feature.u_px is None:
+            return  # no pixel, or one outside the image
         drawn[key] = drawn.get(key, 0) + 1
-        return _OVERLAY[key][0]
+        ax.plot(*at(feature.u_px, feature.v_px), color=LABEL_COLOURS[key][0], linestyle="none", **style)
 
     for g in view.glints:
-        c = colour(g.status, g.occluded_by)
-        if c and g.u_px is not None:
-            ax.plot(*at(g.u_px, g.v_px), marker="+", color=c, markersize=9, mew=1.5)
+        mark(g, marker="+", markersize=9, mew=1.5)
     for p in view.pupil.border:
-        c = colour(p.status, p.occluded_by)
-        if c and p.u_px is not None:
-            ax.plot(*at(p.u_px, p.v_px), marker="o", color=c, markersize=2.5, linestyle="none")
+        mark(p, marker="o", markersize=2.5)
     e = view.pupil.ellipse
     if e is not None:
         ax.add_patch(EllipsePatch(at(e.center_u_px, e.center_v_px), 2 * e.semi_axis_1_px * scale,

@@ -9,8 +9,8 @@
 // toward the nearer canthus by up to 20 deg; its angle from N toward R
 // runs linearly from -root_deg at the root to -root_deg + curl at the tip:
 // an arc of constant curvature, cut into kLashSegments chords (a 9.5 mm
-// lash bent 45 deg strays under 0.02 mm from its arc: a quarter of a
-// headset pixel). Each chord is a capsule (a cylinder with hemispherical
+// lash bent 45 deg strays up to 0.026 mm from its arc, the chords'
+// sagitta: a third of a headset pixel). Each chord is a capsule (a cylinder with hemispherical
 // ends) of the mean radius over its length, tapering from the root's to a
 // third of it at the tip in steps.
 //

@@ -41,7 +41,7 @@ std::vector<Light> lights_of(const Scene& scene, const Camera& camera) {
   return lights;
 }
 
-bool has_lashes(const Scene& scene) {
+bool scene_has_lashes(const Scene& scene) {
   for (const Eye& eye : scene.eyes) {
     const auto& face = eye.appearance().face;
     if (face && face->lashes) return true;

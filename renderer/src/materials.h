@@ -52,7 +52,7 @@ struct PrimaryRecord {
 PixelClass class_of(Surface s);
 // Whether any eye of the scene has lashes (its images then have a lash
 // class and coverage plane).
-bool has_lashes(const Scene& scene);
+bool scene_has_lashes(const Scene& scene);
 // Fills `record` (when given) from the first hit of a camera ray's
 // transmitted chain: depth, normal and class.
 void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* record);

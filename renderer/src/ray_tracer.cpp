@@ -34,6 +34,13 @@
 // Ignoring the cornea (occluded_except_cornea): a flag in the query context
 // read by the cornea's callbacks; when this Embree build supports ray
 // masks, the cornea also gets its own mask bit so that traversal skips it.
+//
+// Lashes: one user primitive per capsule, intersected in double precision
+// like the eyes' surfaces (not Embree's curves, which are intersected in
+// float by kernels that differ between instruction sets). They have their
+// own mask bit and flag (queries that look through them), and sit in a
+// second scene of their own too (occluded_by_lashes: a shadow ray tested
+// against the lashes alone traverses only their tree).
 
 #include "purkinje/renderer/ray_tracer.h"
 
@@ -109,16 +116,31 @@ struct EmbreePacket<16> {
 // beyond tfar, so it must never fall short).
 float embree_far(double t) { return static_cast<float>(t * (1.0 + 1e-6) + 1e-4); }
 
-void bounds_callback(const RTCBoundsFunctionArguments* args) {
-  const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
-  const Box b = surface.world_bounds();
-  RTCBounds* out = args->bounds_o;
+// A double box as Embree's float bounds, rounded outward.
+void set_bounds(const Box& b, RTCBounds* out) {
   out->lower_x = std::nextafter(static_cast<float>(b.lo.x), -INFINITY);
   out->lower_y = std::nextafter(static_cast<float>(b.lo.y), -INFINITY);
   out->lower_z = std::nextafter(static_cast<float>(b.lo.z), -INFINITY);
   out->upper_x = std::nextafter(static_cast<float>(b.hi.x), INFINITY);
   out->upper_y = std::nextafter(static_cast<float>(b.hi.y), INFINITY);
   out->upper_z = std::nextafter(static_cast<float>(b.hi.z), INFINITY);
+}
+
+// What a user callback's hit tells Embree: which primitive, and nothing of
+// the float hit (the lane holds the double one).
+void set_hit(RTCHitN* hits, unsigned n, unsigned i, unsigned geometry, unsigned primitive, unsigned instance) {
+  RTCHitN_geomID(hits, n, i) = geometry;
+  RTCHitN_primID(hits, n, i) = primitive;
+  RTCHitN_instID(hits, n, i, 0) = instance;
+  RTCHitN_Ng_x(hits, n, i) = 0.0f;
+  RTCHitN_Ng_y(hits, n, i) = 0.0f;
+  RTCHitN_Ng_z(hits, n, i) = 0.0f;
+  RTCHitN_u(hits, n, i) = 0.0f;
+  RTCHitN_v(hits, n, i) = 0.0f;
+}
+
+void bounds_callback(const RTCBoundsFunctionArguments* args) {
+  set_bounds(static_cast<const PlacedSurface*>(args->geometryUserPtr)->world_bounds(), args->bounds_o);
 }
 
 void intersect_callback(const RTCIntersectFunctionNArguments* args) {
@@ -139,14 +161,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     lane.lashes = nullptr;
     lane.local_point = local_point;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
-    RTCHitN_geomID(hits, args->N, i) = args->geomID;
-    RTCHitN_primID(hits, args->N, i) = args->primID;
-    RTCHitN_instID(hits, args->N, i, 0) = query->embree.instID[0];
-    RTCHitN_Ng_x(hits, args->N, i) = 0.0f;
-    RTCHitN_Ng_y(hits, args->N, i) = 0.0f;
-    RTCHitN_Ng_z(hits, args->N, i) = 0.0f;
-    RTCHitN_u(hits, args->N, i) = 0.0f;
-    RTCHitN_v(hits, args->N, i) = 0.0f;
+    set_hit(hits, args->N, i, args->geomID, args->primID, query->embree.instID[0]);
   }
 }
 
@@ -207,15 +222,7 @@ void mesh_occluded_filter(const RTCFilterFunctionNArguments* args) {
 // An eye's lashes: one user primitive per capsule, as the surfaces'
 // callbacks but indexed by primID.
 void lash_bounds_callback(const RTCBoundsFunctionArguments* args) {
-  const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
-  const Box b = lashes.bounds(args->primID);
-  RTCBounds* out = args->bounds_o;
-  out->lower_x = std::nextafter(static_cast<float>(b.lo.x), -INFINITY);
-  out->lower_y = std::nextafter(static_cast<float>(b.lo.y), -INFINITY);
-  out->lower_z = std::nextafter(static_cast<float>(b.lo.z), -INFINITY);
-  out->upper_x = std::nextafter(static_cast<float>(b.hi.x), INFINITY);
-  out->upper_y = std::nextafter(static_cast<float>(b.hi.y), INFINITY);
-  out->upper_z = std::nextafter(static_cast<float>(b.hi.z), INFINITY);
+  set_bounds(static_cast<const PlacedLashes*>(args->geometryUserPtr)->bounds(args->primID), args->bounds_o);
 }
 
 void lash_intersect_callback(const RTCIntersectFunctionNArguments* args) {
@@ -235,14 +242,7 @@ void lash_intersect_callback(const RTCIntersectFunctionNArguments* args) {
     lane.lashes = &lashes;
     lane.primitive = args->primID;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
-    RTCHitN_geomID(hits, args->N, i) = args->geomID;
-    RTCHitN_primID(hits, args->N, i) = args->primID;
-    RTCHitN_instID(hits, args->N, i, 0) = query->embree.instID[0];
-    RTCHitN_Ng_x(hits, args->N, i) = 0.0f;
-    RTCHitN_Ng_y(hits, args->N, i) = 0.0f;
-    RTCHitN_Ng_z(hits, args->N, i) = 0.0f;
-    RTCHitN_u(hits, args->N, i) = 0.0f;
-    RTCHitN_v(hits, args->N, i) = 0.0f;
+    set_hit(hits, args->N, i, args->geomID, args->primID, query->embree.instID[0]);
   }
 }
 
@@ -260,11 +260,6 @@ void lash_occluded_callback(const RTCOccludedFunctionNArguments* args) {
     lane.primitive = args->primID;
     RTCRayN_tfar(args->ray, args->N, i) = -INFINITY;  // Embree's "occluded"
   }
-}
-
-Box united(const Box& a, const Box& b) {
-  return {{std::min(a.lo.x, b.lo.x), std::min(a.lo.y, b.lo.y), std::min(a.lo.z, b.lo.z)},
-          {std::max(a.hi.x, b.hi.x), std::max(a.hi.y, b.hi.y), std::max(a.hi.z, b.hi.z)}};
 }
 
 // Clips the ray's [t0, t1] to a box; false when they do not meet.
@@ -681,19 +676,12 @@ bool RayTracer::occluded_except_lashes(const Point3& from, const Point3& to) con
 }
 
 bool RayTracer::occluded_by_lashes(const Point3& from, const Point3& to) const {
-  if (!impl_->lash_scene) {
-    check_ray(from, to - from, 0, 0);
-    check_ray(to, to - from, 0, 0);
-    return false;
-  }
-  // Most shadow rays pass far from the lashes: a box test is cheaper than
-  // Embree's query.
+  check_ray(from, to - from, 0, 0);
+  check_ray(to, to - from, 0, 0);
+  // A box test first: cheaper than Embree's query for a shadow ray that
+  // passes the lashes by.
   double t0 = 0, t1 = 1;
-  if (!clip_to_box(impl_->lash_bounds, from, to - from, t0, t1)) {
-    check_ray(from, to - from, 0, 0);
-    check_ray(to, to - from, 0, 0);
-    return false;
-  }
+  if (!impl_->lash_scene || !clip_to_box(impl_->lash_bounds, from, to - from, t0, t1)) return false;
   return impl_->occluded(from, to, {}, impl_->lash_scene);
 }
 

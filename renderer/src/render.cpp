@@ -440,7 +440,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   if (!options.noise) sensor.noise = false;
   arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
 
-  film.add_aovs(result.aovs, pool, has_lashes(scene));
+  film.add_aovs(result.aovs, pool, scene_has_lashes(scene));
   result.aovs.push_back({"glint", fraction_of_signal(glint_total, result.electrons)});
   for (std::size_t l = 0; l < glint_planes.size(); ++l) {
     result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l], result.electrons)});

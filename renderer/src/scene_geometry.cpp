@@ -294,7 +294,9 @@ bool PlacedLashes::hit(const Lane& lane, unsigned segment, double& t) const {
       const double q = -(b + std::copysign(std::sqrt(disc), b));
       for (const double r : {q / a, q != 0 ? cc / q : q / a}) {
         const double y = baoa + r * bard;
-        consider(r, y > 0 && y < baba);
+        // Closed at the ends, overlapping the hemispheres' tests: no
+        // crossing can fall between the two (the nearest root wins anyway).
+        consider(r, y >= 0 && y <= baba);
       }
     }
   }
@@ -335,9 +337,7 @@ Box PlacedLashes::bounds(unsigned segment) const {
 Box PlacedLashes::world_bounds() const {
   Box all{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
   for (unsigned i = 0; i < segments_.size(); ++i) {
-    const Box b = bounds(i);
-    all.lo = {std::min(all.lo.x, b.lo.x), std::min(all.lo.y, b.lo.y), std::min(all.lo.z, b.lo.z)};
-    all.hi = {std::max(all.hi.x, b.hi.x), std::max(all.hi.y, b.hi.y), std::max(all.hi.z, b.hi.z)};
+    all = united(all, bounds(i));
   }
   return all;
 }

@@ -60,6 +60,12 @@ struct Box {
   Point3 lo, hi;
 };
 
+// The smallest box holding both.
+inline Box united(const Box& a, const Box& b) {
+  return {{std::min(a.lo.x, b.lo.x), std::min(a.lo.y, b.lo.y), std::min(a.lo.z, b.lo.z)},
+          {std::max(a.hi.x, b.hi.x), std::max(a.hi.y, b.hi.y), std::max(a.hi.z, b.hi.z)}};
+}
+
 // The conicoid x^2 + y^2 + k w^2 - 2 R w = 0, w = apex_z - z (depth below
 // the apex, which sits on the z axis), k = 1 + Q; only the cap with
 // 0 <= w <= max_depth_mm. Gradient-based normal: (x, y, R - k w), pointing

@@ -141,6 +141,29 @@ TEST(Labels, JsonWritesNullWhereAStatusHasNoValue) {
   EXPECT_TRUE(pupil["unrefracted_center"]["u_px"].is_null());
 }
 
+// A hidden glint or pupil point keeps its pixel (where it would be seen)
+// and says what hid it; the pupil's centre too. Other statuses have no
+// occluded_by.
+TEST(Labels, AnOccludedFeatureKeepsItsPixelAndSaysWhatHidIt) {
+  SceneTruth truth = hand_made_truth();
+  EyeInCameraTruth& view = truth.views[0];
+  view.glints[0].status = PathStatus::occluded;
+  view.glints[0].occluder = Occluder::lash;
+  view.pupil.border[0].status = PathStatus::occluded;
+  view.pupil.border[0].occluder = Occluder::skin;
+  view.pupil.refracted_center_status = PathStatus::occluded;
+  view.pupil.refracted_center_occluder = Occluder::mesh;
+  const json out = json::parse(truth_to_json(two_light_scene(), truth))["views"][0];
+  EXPECT_EQ(out["glints"][0]["occluded_by"], "lash");
+  EXPECT_EQ(out["glints"][0]["u_px"].get<double>(), 316.5);
+  EXPECT_EQ(out["glints"][0]["v_px"].get<double>(), 239.25);
+  EXPECT_FALSE(out["glints"][1].contains("occluded_by"));
+  EXPECT_EQ(out["pupil"]["border"][0]["occluded_by"], "skin");
+  EXPECT_EQ(out["pupil"]["border"][0]["u_px"].get<double>(), 328);
+  EXPECT_FALSE(out["pupil"]["border"][1].contains("occluded_by"));
+  EXPECT_EQ(out["pupil"]["refracted_center"]["occluded_by"], "mesh");
+}
+
 TEST(Labels, TheEyesFaceIsWrittenAsTheSceneGivesIt) {
   EXPECT_TRUE(json::parse(truth_to_json(two_light_scene(), hand_made_truth()))["eyes"][0]["appearance"]["face"].is_null());
   const Scene scene = parse_scene(R"({ "format": 1, "name": "face",

@@ -560,7 +560,7 @@ TEST(SceneFile, FaceErrorsNameTheKeyAndTheRule) {
 
 TEST(SceneFile, ReadsEveryLashKeyAndWritesThemBack) {
   const Scene scene = parse_scene(eye_with(R"("eyelids": {}, "face": { "lashes": { "upper_per_mm": 3.5,
-      "lower_per_mm": 0, "upper_length_mm": 11, "lower_length_mm": 7.5, "upper_curl_deg": 60, "lower_curl_deg": -10,
+      "lower_per_mm": 0, "upper_length_mm": 11, "lower_length_mm": 7.5, "upper_curl_deg": 60, "lower_curl_deg": 10,
       "root_deg": 35, "thickness_mm": 0.12, "albedo": 0.03, "seed": 9007199254740991 } })"),
                                   "s.json");
   const Lashes& l = *scene.eyes[0].appearance().face->lashes;
@@ -569,7 +569,7 @@ TEST(SceneFile, ReadsEveryLashKeyAndWritesThemBack) {
   EXPECT_DOUBLE_EQ(l.upper_length_mm, 11);
   EXPECT_DOUBLE_EQ(l.lower_length_mm, 7.5);
   EXPECT_DOUBLE_EQ(l.upper_curl_deg, 60);
-  EXPECT_DOUBLE_EQ(l.lower_curl_deg, -10);
+  EXPECT_DOUBLE_EQ(l.lower_curl_deg, 10);
   EXPECT_DOUBLE_EQ(l.root_deg, 35);
   EXPECT_DOUBLE_EQ(l.thickness_mm, 0.12);
   EXPECT_DOUBLE_EQ(l.albedo, 0.03);
@@ -587,7 +587,8 @@ TEST(SceneFile, LashErrorsNameTheKeyAndTheRule) {
   const std::map<std::string, std::string> bad = {
       {R"({ "upper_per_mm": 11 })", "eyes[0].face.lashes.upper_per_mm = 11: must be between 0 and 10"},
       {R"({ "thickness_mm": 0 })", "eyes[0].face.lashes.thickness_mm = 0: must be between 0.02 and 0.3"},
-      {R"({ "upper_curl_deg": 180 })", "eyes[0].face.lashes.upper_curl_deg = 180: must be between -30 and 120"},
+      {R"({ "upper_curl_deg": -10 })", "eyes[0].face.lashes.upper_curl_deg = -10: must be between 0 and 120"},
+      {R"({ "root_deg": 50 })", "eyes[0].face.lashes.root_deg = 50: must be between -45 and 40"},
       {R"({ "seed": -1 })", "eyes[0].face.lashes.seed = -1"},
       {R"({ "colour": 1 })", "eyes[0].face.lashes.colour = 1: unknown key"},
   };

@@ -107,9 +107,12 @@ inline constexpr std::array<LashKey, 9> kLashKeys{{
     {"lower_per_mm", &Lashes::lower_per_mm, 0, 10},
     {"upper_length_mm", &Lashes::upper_length_mm, 1, 15},
     {"lower_length_mm", &Lashes::lower_length_mm, 1, 15},
-    {"upper_curl_deg", &Lashes::upper_curl_deg, -30, 120},
-    {"lower_curl_deg", &Lashes::lower_curl_deg, -30, 120},
-    {"root_deg", &Lashes::root_deg, -45, 60},
+    // A lash may not turn back toward the eye: with a root tilted 40 (+5)
+    // deg toward the opening and no curl its tip still leads away from the
+    // cornea.
+    {"upper_curl_deg", &Lashes::upper_curl_deg, 0, 120},
+    {"lower_curl_deg", &Lashes::lower_curl_deg, 0, 120},
+    {"root_deg", &Lashes::root_deg, -45, 40},
     {"thickness_mm", &Lashes::thickness_mm, 0.02, 0.3},
     {"albedo", &Lashes::albedo, 0, 1},
 }};

@@ -57,6 +57,7 @@ struct PupilTruth {
   Ellipse visible_ellipse;
   // The pupil centre seen through the cornea (its own refracted path).
   PathStatus refracted_center_status = PathStatus::no_solution;
+  Occluder refracted_center_occluder = Occluder::none;  // for status occluded
   Pixel refracted_center;
   Refraction refracted_center_path;
   // The pupil centre projected straight, without the cornea.

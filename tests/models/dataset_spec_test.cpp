@@ -330,13 +330,14 @@ TEST(DatasetSpec, TheLashParametersReachTheFirstEyesLashes) {
                                               "f.json", kFolder);
   for (std::uint64_t k : {0u, 7u}) {
     const ImageDraw d = draw_image(spec, k);
-    const Lashes& lashes = *scene_for_image(spec, d).eyes[0].appearance().face->lashes;
+    const Scene scene = scene_for_image(spec, d);
+    const Lashes& lashes = *scene.eyes[0].appearance().face->lashes;
     for (const LashKey& key : kLashKeys) {
       EXPECT_EQ(lashes.*key.member, column(spec, d, "lash_" + std::string(key.name))) << key.name;
     }
     EXPECT_EQ(static_cast<double>(lashes.seed), column(spec, d, "lash_seed"));
     // The other eye's lashes stay as the scene has them.
-    EXPECT_EQ(scene_for_image(spec, d).eyes[1].appearance().face->lashes->seed, 2u);
+    EXPECT_EQ(scene.eyes[1].appearance().face->lashes->seed, 2u);
   }
 }
 

@@ -111,7 +111,9 @@ TEST(Lashes, AMarginGrowsItsLashesByTheRules) {
     double length = 0;
     for (int j = 0; j < kLashSegments; ++j) {
       const LashSegment& s = upper[k + j];
-      if (j > 0) EXPECT_EQ(s.a, upper[k + j - 1].b);  // a chain
+      if (j > 0) {
+        EXPECT_EQ(s.a, upper[k + j - 1].b);  // a chain
+      }
       EXPECT_NEAR(s.radius_mm, r0 * (1 - 2.0 / 3 * (j + 0.5) / kLashSegments), 1e-15);
       length += (s.b - s.a).norm();
     }

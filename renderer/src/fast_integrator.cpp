@@ -116,7 +116,12 @@ class FastIntegrator final : public PathIntegrator {
   // `traced`: the pixels that will be sampled (the caches cover them).
   FastIntegrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
                  const RenderOptions& options, const PixelRegion& traced)
-      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)), seed_(options.seed) {
+      : scene_(scene),
+        camera_(camera),
+        tracer_(tracer),
+        lashes_(tracer.has_lashes()),
+        lights_(lights_of(scene, camera)),
+        seed_(options.seed) {
     const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
       return !tracer_.occluded_except_cornea(light, cornea);
     };
@@ -358,7 +363,7 @@ class FastIntegrator final : public PathIntegrator {
       if (agreed && k < VisibilityCache::kMaxLights && (agreed->known >> k & 1)) {
         // The cache's nodes ignore the lashes (lit()): their thin shadows
         // are traced here, against the lashes alone.
-        if (!(agreed->lit >> k & 1) || tracer_.occluded_by_lashes(origin, l.position)) continue;
+        if (!(agreed->lit >> k & 1) || (lashes_ && tracer_.occluded_by_lashes(origin, l.position))) continue;
       } else if (tracer_.occluded(origin, l.position)) {
         continue;
       }
@@ -608,6 +613,7 @@ class FastIntegrator final : public PathIntegrator {
   const Scene& scene_;
   const Camera& camera_;
   const RayTracer& tracer_;
+  bool lashes_;  // the scene has lashes: settled shadow rays are traced against them
   std::vector<Light> lights_;
   std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
   std::vector<IrisRings> iris_indirect_ = std::vector<IrisRings>(scene_.eyes.size());  // [eye], channels: groups

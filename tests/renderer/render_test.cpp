@@ -640,6 +640,32 @@ RenderedPupil render_pupil(const Scene& scene, const PupilTruth& pupil, int spp 
   return out;
 }
 
+// A random face scene's pupil rendered over its region (render_pupil), or
+// nothing when the labels fit no ellipse or the image cuts it.
+std::optional<RenderedPupil> render_whole_pupil(const Scene& scene, int spp) {
+  const Camera& camera = scene.cameras[0];
+  const SceneTruth truth = compute_truth(scene);
+  const PupilTruth& geometric = truth.views[0].pupil;
+  if (!geometric.ellipse_valid) return std::nullopt;
+  const Ellipse& e = geometric.ellipse;
+  const double r = e.semi_axis_1_px + e.semi_axis_2_px;
+  if (e.center.u - r < 2 || e.center.v - r < 2 || e.center.u + r > camera.intrinsics().width - 3 ||
+      e.center.v + r > camera.intrinsics().height - 3) {
+    return std::nullopt;
+  }
+  return render_pupil(scene, geometric, spp);
+}
+
+// The rendered outline's centre within 0.1 px of the labelled ellipse's;
+// the worst so far kept in `worst_px`.
+void expect_centre(const RenderedPupil& rendered, int scene, double& worst_px) {
+  const Ellipse& label = rendered.result.truth.views[0].pupil.ellipse;
+  ASSERT_TRUE(rendered.ellipse) << "scene " << scene << ": " << rendered.crossings << " crossings";
+  const double error = std::hypot(rendered.ellipse->center.u - label.center.u, rendered.ellipse->center.v - label.center.v);
+  EXPECT_LT(error, 0.1) << "scene " << scene;
+  worst_px = std::max(worst_px, error);
+}
+
 TEST(RenderPupil, SegmentationEllipseCentreMatchesLabel) {
   for (const char* name : {"remote", "headset"}) {
     Scene scene = bundled(name);
@@ -673,22 +699,11 @@ TEST(RenderPupil, RandomFaceScenesCentresAndOcclusionFlagsMatchTheImage) {
   int whole = 0, flags = 0, hidden = 0, disagreements = 0;
   double worst_px = 0;
   for (int i = 0; i < 100; ++i) {
-    // The whole image (the crop would cut most pupils); only the pupil's
-    // region is rendered.
-    const Scene scene = random_scene(i, true, rng, false);
-    const Camera& camera = scene.cameras[0];
-    const SceneTruth truth = compute_truth(scene);
-    const PupilTruth& geometric = truth.views[0].pupil;
-    if (!geometric.ellipse_valid) continue;
-    const Ellipse& e = geometric.ellipse;
-    const double r = e.semi_axis_1_px + e.semi_axis_2_px;
-    if (e.center.u - r < 2 || e.center.v - r < 2 || e.center.u + r > camera.intrinsics().width - 3 ||
-        e.center.v + r > camera.intrinsics().height - 3) {
-      continue;  // a pupil the crop cuts
-    }
-    const RenderedPupil rendered = render_pupil(scene, geometric, 4);
-    const PupilTruth& pupil = rendered.result.truth.views[0].pupil;
-    const ImagePlane& skin = aov(rendered.result, "skin");
+    // The whole image (the crop would cut most pupils).
+    const std::optional<RenderedPupil> rendered = render_whole_pupil(random_scene(i, true, rng, false), 4);
+    if (!rendered) continue;
+    const PupilTruth& pupil = rendered->result.truth.views[0].pupil;
+    const ImagePlane& skin = aov(rendered->result, "skin");
     bool all_seen = true;
     for (const PupilBorderPointTruth& b : pupil.border) {
       if (b.status != PathStatus::ok && b.status != PathStatus::occluded) {
@@ -712,11 +727,7 @@ TEST(RenderPupil, RandomFaceScenesCentresAndOcclusionFlagsMatchTheImage) {
       }
     }
     if (!all_seen) continue;
-    ASSERT_TRUE(rendered.ellipse) << "scene " << i << ": " << rendered.crossings << " crossings";
-    const double error = std::hypot(rendered.ellipse->center.u - pupil.ellipse.center.u,
-                                    rendered.ellipse->center.v - pupil.ellipse.center.v);
-    EXPECT_LT(error, 0.1) << "scene " << i;
-    worst_px = std::max(worst_px, error);
+    ASSERT_NO_FATAL_FAILURE(expect_centre(*rendered, i, worst_px));
     ++whole;
   }
   EXPECT_GE(whole, 30);
@@ -746,21 +757,11 @@ TEST(RenderPupil, RandomLashedFaceScenesOcclusionFlagsMatchTheImage) {
   int whole = 0, flags = 0, by_skin = 0, by_lash = 0, disagreements = 0;
   double worst_px = 0;
   for (int i = 0; i < 100; ++i) {
-    const Scene scene = random_scene(i, true, rng, false, true);
-    const Camera& camera = scene.cameras[0];
-    const SceneTruth truth = compute_truth(scene);
-    const PupilTruth& geometric = truth.views[0].pupil;
-    if (!geometric.ellipse_valid) continue;
-    const Ellipse& e = geometric.ellipse;
-    const double r = e.semi_axis_1_px + e.semi_axis_2_px;
-    if (e.center.u - r < 2 || e.center.v - r < 2 || e.center.u + r > camera.intrinsics().width - 3 ||
-        e.center.v + r > camera.intrinsics().height - 3) {
-      continue;
-    }
-    const RenderedPupil rendered = render_pupil(scene, geometric, 8);
-    const PupilTruth& pupil = rendered.result.truth.views[0].pupil;
-    const ImagePlane& skin = aov(rendered.result, "skin");
-    const ImagePlane& lash = aov(rendered.result, "lash");
+    const std::optional<RenderedPupil> rendered = render_whole_pupil(random_scene(i, true, rng, false, true), 8);
+    if (!rendered) continue;
+    const PupilTruth& pupil = rendered->result.truth.views[0].pupil;
+    const ImagePlane& skin = aov(rendered->result, "skin");
+    const ImagePlane& lash = aov(rendered->result, "lash");
     bool all_seen = true;
     for (const PupilBorderPointTruth& b : pupil.border) {
       if (b.status != PathStatus::ok && b.status != PathStatus::occluded) {
@@ -799,15 +800,11 @@ TEST(RenderPupil, RandomLashedFaceScenesOcclusionFlagsMatchTheImage) {
     if (!all_seen) continue;
     // A lash across the pupil cuts its outline: only pupils no lash
     // shares a pixel with.
-    const ImagePlane& seen_pupil = aov(rendered.result, "pupil");
+    const ImagePlane& seen_pupil = aov(rendered->result, "pupil");
     bool crossed = false;
     for (std::size_t k = 0; k < lash.values.size(); ++k) crossed = crossed || (lash.values[k] > 0 && seen_pupil.values[k] > 0);
     if (crossed) continue;
-    ASSERT_TRUE(rendered.ellipse) << "scene " << i << ": " << rendered.crossings << " crossings";
-    const double error = std::hypot(rendered.ellipse->center.u - pupil.ellipse.center.u,
-                                    rendered.ellipse->center.v - pupil.ellipse.center.v);
-    EXPECT_LT(error, 0.1) << "scene " << i;
-    worst_px = std::max(worst_px, error);
+    ASSERT_NO_FATAL_FAILURE(expect_centre(*rendered, i, worst_px));
     ++whole;
   }
   EXPECT_GE(whole, 15);

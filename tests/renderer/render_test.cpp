@@ -20,6 +20,7 @@
 
 #include "purkinje/models/scene_file.h"
 #include "embree_isa.h"
+#include "environment_count.h"
 #include "purkinje/renderer/image_io.h"
 
 namespace purkinje::renderer {
@@ -494,6 +495,14 @@ TEST(RenderGlints, BundledScenesCentroidsMatchLabels) {
 // image: the glints' labels and pixels are tested all the same, at a sixth
 // of the cost. With `lashes` (and a face), random lashes too, drawn from a
 // generator of their own so that the other draws stay as they were.
+// The random-scene checks draw 100 scenes (the bar); a run under other
+// instruction sets or sanitizers checks the code, not the bar, on the
+// first PURKINJE_RANDOM_SCENES of them (the same scenes: one seed) and
+// asserts no counts (tests/CMakeLists.txt, .ci/run).
+constexpr int kBarScenes = 100;
+int random_scenes() { return testing::count_from_environment("PURKINJE_RANDOM_SCENES", kBarScenes, 1); }
+bool at_bar() { return random_scenes() == kBarScenes; }
+
 Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, bool lashes = false) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const auto between = [&](double a, double b) { return a + (b - a) * unit(rng); };
@@ -566,7 +575,7 @@ Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, boo
 GlintCheck random_scenes_glints(bool face, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   GlintCheck total;
-  for (int i = 0; i < 100; ++i) {
+  for (int i = 0; i < random_scenes(); ++i) {
     const GlintCheck check = check_glints(random_scene(i, face, rng), 1);
     total.glints += check.glints;
     total.worst_px = std::max(total.worst_px, check.worst_px);
@@ -583,7 +592,9 @@ void record(const GlintCheck& check) {
 
 TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
   const GlintCheck check = random_scenes_glints(false, 20261122);
-  EXPECT_GT(check.glints, 150);
+  if (at_bar()) {
+    EXPECT_GT(check.glints, 150);
+  }
   record(check);
 }
 
@@ -591,7 +602,9 @@ TEST(RenderGlints, RandomScenesCentroidsMatchLabels) {
 // the labels say which (an occluded glint is not checked, a visible one is).
 TEST(RenderGlints, RandomFaceScenesCentroidsMatchLabels) {
   const GlintCheck check = random_scenes_glints(true, 20261127);
-  EXPECT_GT(check.glints, 120);
+  if (at_bar()) {
+    EXPECT_GT(check.glints, 120);
+  }
   record(check);
 }
 
@@ -698,7 +711,7 @@ TEST(RenderPupil, RandomFaceScenesCentresAndOcclusionFlagsMatchTheImage) {
   std::mt19937_64 rng(20261128);
   int whole = 0, flags = 0, hidden = 0, disagreements = 0;
   double worst_px = 0;
-  for (int i = 0; i < 100; ++i) {
+  for (int i = 0; i < random_scenes(); ++i) {
     // The whole image (the crop would cut most pupils).
     const std::optional<RenderedPupil> rendered = render_whole_pupil(random_scene(i, true, rng, false), 4);
     if (!rendered) continue;
@@ -730,9 +743,11 @@ TEST(RenderPupil, RandomFaceScenesCentresAndOcclusionFlagsMatchTheImage) {
     ASSERT_NO_FATAL_FAILURE(expect_centre(*rendered, i, worst_px));
     ++whole;
   }
-  EXPECT_GE(whole, 30);
-  EXPECT_GE(flags, 2000);
-  EXPECT_GE(hidden, 200);
+  if (at_bar()) {
+    EXPECT_GE(whole, 30);
+    EXPECT_GE(flags, 2000);
+    EXPECT_GE(hidden, 200);
+  }
   RecordProperty("whole_pupils", whole);
   RecordProperty("worst_pupil_centre_px", std::to_string(worst_px));
   RecordProperty("border_flags", flags);
@@ -756,7 +771,7 @@ TEST(RenderPupil, RandomLashedFaceScenesOcclusionFlagsMatchTheImage) {
   std::mt19937_64 rng(20261128);
   int whole = 0, flags = 0, by_skin = 0, by_lash = 0, disagreements = 0;
   double worst_px = 0;
-  for (int i = 0; i < 100; ++i) {
+  for (int i = 0; i < random_scenes(); ++i) {
     const std::optional<RenderedPupil> rendered = render_whole_pupil(random_scene(i, true, rng, false, true), 8);
     if (!rendered) continue;
     const PupilTruth& pupil = rendered->result.truth.views[0].pupil;
@@ -807,9 +822,11 @@ TEST(RenderPupil, RandomLashedFaceScenesOcclusionFlagsMatchTheImage) {
     ASSERT_NO_FATAL_FAILURE(expect_centre(*rendered, i, worst_px));
     ++whole;
   }
-  EXPECT_GE(whole, 15);
-  EXPECT_GE(flags, 2000);
-  EXPECT_GE(by_lash, 50);
+  if (at_bar()) {
+    EXPECT_GE(whole, 15);
+    EXPECT_GE(flags, 2000);
+    EXPECT_GE(by_lash, 50);
+  }
   EXPECT_LE(disagreements * 1000, flags);  // >= 99.9% agree
   RecordProperty("whole_unlashed_pupils", whole);
   RecordProperty("worst_pupil_centre_px", std::to_string(worst_px));

@@ -8,7 +8,7 @@ packages=(
   cmake ninja-build g++ pkg-config ccache
   libglm-dev libceres-dev libeigen3-dev nlohmann-json3-dev libcli11-dev
   libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libtbb-dev
-  libopencv-dev zlib1g-dev libpng-dev
+  libopencv-dev zlib1g-dev libpng-dev libjpeg-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # The fuzzers (scripts/fuzz.sh): clang; its libFuzzer, ASan and UBSan
   # runtimes, which clang only recommends; llvm-symbolizer, for reports

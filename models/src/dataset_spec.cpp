@@ -113,7 +113,10 @@ const std::vector<ParameterRule>& scene_rules() {
       {"read_noise_e", T::real, 0, 1e6},
       {"noise", T::boolean},
       {"focus_distance_mm", T::real, 0, 1e6, true},
-      {"bits", T::integer, 0, 0, false, {8, 10, 12, 16}}}});
+      {"bits", T::integer, 0, 0, false, {8, 10, 12, 16}},
+      {"corner_illumination", T::real, 0, 1, true},
+      {"hot_pixel_fraction", T::real, 0, 0.01},
+      {"jpeg_quality", T::integer, 1, 100}}});
   return rules;
 }
 
@@ -463,6 +466,21 @@ struct Reader {
         where.at(rule.name).fail("", "the scene's first eye has no lashes (scene-format.md: lashes)");
       }
     }
+    // JPEG holds 8 bits: no set may draw a JPEG quality and a deeper image
+    // for one camera (the scene file's rule).
+    const auto may_be_deep = [&](const Camera& camera) {
+      if (!given("bits")) return camera.sensor().bits != 8;
+      const Distribution& d = drawn.at("bits");
+      const std::vector<double> bits = d.values.empty() ? std::vector<double>{d.low, d.high} : d.values;
+      return std::any_of(bits.begin(), bits.end(), [](double b) { return b != 8; });
+    };
+    for (const Camera& camera : scene.cameras) {
+      if (!spec.camera.empty() && camera.name() != spec.camera) continue;
+      if ((given("jpeg_quality") || camera.sensor().jpeg_quality) && may_be_deep(camera)) {
+        where.at(given("jpeg_quality") ? "jpeg_quality" : "bits")
+            .fail("", "camera '" + camera.name() + "' would get a JPEG of more than 8 bits: JPEG holds 8 bits");
+      }
+    }
     // A focus no nearer than the lens: the scene file's rule, for every
     // camera the set renders.
     if (given("focus_distance_mm")) {
@@ -799,6 +817,9 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
     if (auto v = value("noise")) s.noise = *v != 0;
     if (auto v = value("focus_distance_mm")) s.focus_distance_mm = *v;
     if (auto v = value("bits")) s.bits = static_cast<int>(*v);
+    if (auto v = value("corner_illumination")) s.corner_illumination = *v;
+    if (auto v = value("hot_pixel_fraction")) s.hot_pixel_fraction = *v;
+    if (auto v = value("jpeg_quality")) s.jpeg_quality = static_cast<int>(*v);
     camera = Camera(camera.name(), camera.intrinsics(), camera.distortion(), camera.world_from_camera(), s);
   }
   return scene;

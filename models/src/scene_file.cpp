@@ -114,6 +114,22 @@ Sensor read_sensor(Object& s, Sensor sensor, std::optional<double> focal_length_
     sensor.focus_distance_mm = distance_mm;
   }
   sensor.noise = s.get_or<bool>("noise", sensor.noise);
+  // A corner at 0 would be black, and a lens brighter at its corners than
+  // at its centre is no vignetting.
+  if (auto corner = s.optional("corner_illumination")) {
+    sensor.corner_illumination = corner->as_double();
+    if (!(sensor.corner_illumination > 0 && sensor.corner_illumination <= 1)) corner->fail("must be > 0 and <= 1");
+  }
+  // Beyond 1% a sensor is scrap, not a camera with hot pixels.
+  sensor.hot_pixel_fraction = s.within_or("hot_pixel_fraction", 0, 0.01, sensor.hot_pixel_fraction);
+  sensor.hot_pixel_e_per_s = s.non_negative_or("hot_pixel_e_per_s", sensor.hot_pixel_e_per_s);
+  if (auto seed = s.optional("hot_pixel_seed")) sensor.hot_pixel_seed = seed->as_exact_count();
+  if (auto quality = s.optional("jpeg_quality")) {
+    const int q = quality->as_int();
+    if (q < 1 || q > 100) quality->fail("must be an integer from 1 to 100");
+    if (sensor.bits != 8) quality->fail("needs 8-bit images (bits = " + std::to_string(sensor.bits) + "): JPEG holds 8 bits");
+    sensor.jpeg_quality = q;
+  }
   s.finish();
   return sensor;
 }
@@ -682,6 +698,14 @@ ordered_json sensor_json(const Sensor& s) {
   o["psf_sigma_px"] = s.psf_sigma_px;
   if (s.focus_distance_mm) o["focus_distance_mm"] = *s.focus_distance_mm;
   o["noise"] = s.noise;
+  // The realism keys only when set: scenes without them write as before.
+  if (s.corner_illumination != 1) o["corner_illumination"] = s.corner_illumination;
+  if (s.hot_pixel_fraction > 0) {
+    o["hot_pixel_fraction"] = s.hot_pixel_fraction;
+    o["hot_pixel_e_per_s"] = s.hot_pixel_e_per_s;
+    o["hot_pixel_seed"] = s.hot_pixel_seed;
+  }
+  if (s.jpeg_quality) o["jpeg_quality"] = *s.jpeg_quality;
   return o;
 }
 

@@ -117,7 +117,13 @@ void bind_scene(py::module_& m) {
       .def_readonly("bits", &Sensor::bits, "ADC depth: 8, 10, 12 or 16")
       .def_readonly("psf_sigma_px", &Sensor::psf_sigma_px, "the optics' Gaussian point spread, px")
       .def_readonly("focus_distance_mm", &Sensor::focus_distance_mm, "None: everything in focus")
-      .def_readonly("noise", &Sensor::noise, "whether shot and read noise are on");
+      .def_readonly("noise", &Sensor::noise, "whether shot and read noise are on")
+      .def_readonly("corner_illumination", &Sensor::corner_illumination,
+                    "the lens's vignetting beyond cos^4: relative illumination at the farthest corner (1: none)")
+      .def_readonly("hot_pixel_fraction", &Sensor::hot_pixel_fraction, "fraction of hot pixels (0: none)")
+      .def_readonly("hot_pixel_e_per_s", &Sensor::hot_pixel_e_per_s, "a hot pixel's mean dark current, electrons/s")
+      .def_readonly("hot_pixel_seed", &Sensor::hot_pixel_seed, "picks the hot pixels (the same in every image)")
+      .def_readonly("jpeg_quality", &Sensor::jpeg_quality, "None: raw; else the image went through a JPEG of this quality");
 
   py::class_<Camera>(m, "Camera", "A pinhole camera in OpenCV's conventions, with its sensor.")
       .def_property_readonly("name", &Camera::name, "the camera's name, unique in its scene")

@@ -105,6 +105,11 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
                                 std::to_string(options.iris_cache_resolution) +
                                 ": must be 0 (from the iris's size in the image) or in [2, 513]");
   }
+  // Checked before the rays are traced, not after.
+  if (const Sensor& sensor = scene.cameras[camera].sensor(); sensor.jpeg_quality && sensor.bits != 8) {
+    throw std::invalid_argument("render: camera " + scene.cameras[camera].name() + ": sensor.jpeg_quality with bits = " +
+                                std::to_string(sensor.bits) + ": JPEG holds 8 bits");
+  }
   if (options.region) {
     const PixelRegion& r = *options.region;
     const Intrinsics& k = scene.cameras[camera].intrinsics();
@@ -184,11 +189,11 @@ class CameraPass {
   }
 
  private:
-  // Natural vignetting: irradiance on the sensor falls as cos^4 of the
-  // field angle.
-  double vignetting_at(const UnitVector3& centre_ray) const {
+  // Vignetting at a pixel whose centre's ray is `centre_ray`: the natural
+  // cos^4 of the field angle, times the lens's own (sensor.corner_illumination).
+  double vignetting_at(int x, int y, const UnitVector3& centre_ray) const {
     const double cos_field = dot(centre_ray, axis_);
-    return cos_field * cos_field * cos_field * cos_field;
+    return cos_field * cos_field * cos_field * cos_field * lens_illumination(camera_, x, y);
   }
 
   // The camera ray through an image position.
@@ -206,7 +211,7 @@ class CameraPass {
     integrator_.sample(ray, hit, image_position, path, sum, record, 1.0);
     std::array<int, kClasses> counts{};
     counts[static_cast<int>(record.pixel_class)] = 1;
-    film_.store(x, y, sum, 1, vignetting_at(ray.direction), record, counts, record.through_cornea ? 1 : 0);
+    film_.store(x, y, sum, 1, vignetting_at(x, y, ray.direction), record, counts, record.through_cornea ? 1 : 0);
   }
 
   // A pixel's `samples` (more than one) with a per-pixel shift of the R2
@@ -220,7 +225,7 @@ class CameraPass {
     const double shift_u = uniform01(options_.seed, kJitterStream, 2 * pixel);
     const double shift_v = uniform01(options_.seed, kJitterStream, 2 * pixel + 1);
     const UnitVector3 centre_ray = camera_.back_project({double(x), double(y)});  // for the vignetting
-    const double vignetting = vignetting_at(centre_ray);
+    const double vignetting = vignetting_at(x, y, centre_ray);
     Contribution sum;
     std::array<int, kClasses> counts{};
     std::array<PrimaryRecord, kClasses> first_of_class{};
@@ -310,7 +315,10 @@ void image_glints(const Scene& scene, int camera_index, SceneTruth& truth, const
       if (g.status == PathStatus::ok) {
         image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection);
         if (image.radiometry.status != PathStatus::ok) g.status = image.status = image.radiometry.status;
-        image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm);
+        // The natural falloff is in the power through the aperture; the
+        // lens's own vignetting is not.
+        image.electrons = image.radiometry.power_w * electrons_per_watt(camera.sensor(), light.wavelength_nm) *
+                          lens_illumination(camera, g.pixel.u, g.pixel.v);
         if (image.electrons > 0 && std::isfinite(image.electrons)) {
           add_point_image(total, g.pixel.u, g.pixel.v, image.electrons, psf, image.radiometry.source_cov_px2);
           if (per_light) {
@@ -439,6 +447,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   Sensor sensor = camera.sensor();
   if (!options.noise) sensor.noise = false;
   arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
+  if (sensor.jpeg_quality) compress_jpeg(result.sensor, *sensor.jpeg_quality);
 
   film.add_aovs(result.aovs, pool, scene_has_lashes(scene));
   result.aovs.push_back({"glint", fraction_of_signal(glint_total, result.electrons)});

@@ -13,6 +13,7 @@
 #include "materials.h"
 #include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/render.h"
+#include "purkinje/renderer/sensor_model.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -37,6 +38,14 @@ json sensor_json(const Sensor& s, bool noise) {
   out["psf_sigma_px"] = number(s.psf_sigma_px);
   out["focus_distance_mm"] = s.focus_distance_mm ? number(*s.focus_distance_mm) : json(nullptr);
   out["noise"] = s.noise && noise;
+  // The realism keys only when set (as in scene files).
+  if (s.corner_illumination != 1) out["corner_illumination"] = number(s.corner_illumination);
+  if (s.hot_pixel_fraction > 0) {
+    out["hot_pixel_fraction"] = number(s.hot_pixel_fraction);
+    out["hot_pixel_e_per_s"] = number(s.hot_pixel_e_per_s);
+    out["hot_pixel_seed"] = s.hot_pixel_seed;
+  }
+  if (s.jpeg_quality) out["jpeg_quality"] = *s.jpeg_quality;
   return out;
 }
 
@@ -108,6 +117,15 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
     glints.push_back(out);
   }
   render["glints"] = glints;
+  // Where a glint detector may see a glint that is none (only when the
+  // sensor has hot pixels).
+  if (camera.sensor().hot_pixel_fraction > 0) {
+    json hot = json::array();
+    for (const HotPixel& p : hot_pixels(camera.sensor(), camera.intrinsics().width, camera.intrinsics().height)) {
+      hot.push_back({{"x_px", p.x}, {"y_px", p.y}, {"dark_e", number(p.dark_e)}});
+    }
+    render["hot_pixels"] = hot;
+  }
   labels["render"] = render;
   return labels;
 }

@@ -26,6 +26,8 @@ enum Stream : std::uint64_t {
   kPathStream = 3,        // reference: a camera path's decisions
   kPhotonStream = 4,      // reference: the photons through the cornea
   kSensorNoiseStream = 0x8000000000000001ull,
+  // A sensor's hot pixels, keyed by its hot_pixel_seed (not the render's).
+  kHotPixelStream = 0x8000000000000002ull,
 };
 
 // Tables of Marsaglia and Tsang's ziggurat for the standard normal (2000,

@@ -582,6 +582,35 @@ void add_point_image(ImagePlane& electrons, double u, double v, double total_ele
   }
 }
 
+double lens_illumination(const Camera& camera, double u, double v) {
+  const double corner = camera.sensor().corner_illumination;
+  if (corner == 1) return 1;
+  if (!(corner > 0 && corner <= 1)) fail("sensor.corner_illumination", corner, "must be > 0 and <= 1");
+  const Intrinsics& k = camera.intrinsics();
+  // The farthest corner of the image's pixel edges from the principal point.
+  const double far_u = std::max(k.cx + 0.5, k.width - 0.5 - k.cx), far_v = std::max(k.cy + 0.5, k.height - 0.5 - k.cy);
+  const double rho2 = ((u - k.cx) * (u - k.cx) + (v - k.cy) * (v - k.cy)) / (far_u * far_u + far_v * far_v);
+  return std::max(0.0, 1 - (1 - corner) * rho2);
+}
+
+std::vector<HotPixel> hot_pixels(const Sensor& sensor, int width, int height) {
+  if (!(sensor.hot_pixel_fraction >= 0 && sensor.hot_pixel_fraction <= 0.01)) {
+    fail("sensor.hot_pixel_fraction", sensor.hot_pixel_fraction, "must be between 0 and 0.01");
+  }
+  require_non_negative("sensor.hot_pixel_e_per_s", sensor.hot_pixel_e_per_s);
+  require_non_negative("sensor.exposure_s", sensor.exposure_s);
+  std::vector<HotPixel> hot;
+  if (sensor.hot_pixel_fraction == 0) return hot;
+  const double mean_e = sensor.hot_pixel_e_per_s * sensor.exposure_s;
+  const std::uint64_t pixels = static_cast<std::uint64_t>(std::max(width, 0)) * std::max(height, 0);
+  for (std::uint64_t i = 0; i < pixels; ++i) {
+    if (uniform01(sensor.hot_pixel_seed, kHotPixelStream, 2 * i) >= sensor.hot_pixel_fraction) continue;
+    hot.push_back({static_cast<int>(i % width), static_cast<int>(i / width),
+                   mean_e * (0.5 + uniform01(sensor.hot_pixel_seed, kHotPixelStream, 2 * i + 1))});
+  }
+  return hot;
+}
+
 SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint64_t seed) {
   require_plane("expose", electrons);
   if (sensor.bits != 8 && sensor.bits != 10 && sensor.bits != 12 && sensor.bits != 16) {
@@ -601,6 +630,14 @@ SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint6
   const double dn_per_electron = sensor.gain * max_dn_real / sensor.full_well_e;
   const double full_well = sensor.full_well_e, read_noise = sensor.read_noise_e;
 
+  // Dark charge: zero but for the hot pixels.
+  std::vector<double> dark;
+  const std::vector<HotPixel> hot = hot_pixels(sensor, electrons.width, electrons.height);
+  if (!hot.empty()) {
+    dark.assign(electrons.values.size(), 0.0);
+    for (const HotPixel& p : hot) dark[static_cast<std::size_t>(p.y) * electrons.width + p.x] = p.dark_e;
+  }
+
   const bool noise = sensor.noise;
   const std::uint64_t noise_key = stream_key(seed, kSensorNoiseStream);
   for_rows(electrons.height, [&](int y) {
@@ -608,7 +645,8 @@ SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint6
     const float* in = electrons.values.data() + row;
     unsigned short* out = image.values.data() + row;
     for (int x = 0; x < electrons.width; ++x) {
-      const double mean = in[x];
+      double mean = in[x];
+      if (!dark.empty()) mean = (mean > 0 ? mean : 0.0) + dark[row + x];
       // NaN and negative light count as none; light that overflowed to
       // +inf saturates like any other far too bright pixel.
       double e = mean > 0 ? std::min(mean, std::numeric_limits<double>::max()) : 0.0;

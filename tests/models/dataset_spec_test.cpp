@@ -235,7 +235,7 @@ TEST(DatasetSpec, EveryParameterReachesTheScene) {
       "led_power_scale": {"uniform": [0.5, 2]},
       "exposure_s": {"uniform": [0.002, 0.008]}, "gain": {"uniform": [1, 2]},
       "read_noise_e": {"uniform": [2, 8]}, "noise": false, "focus_distance_mm": {"uniform": [500, 700]},
-      "bits": 12,
+      "bits": 12, "corner_illumination": {"uniform": [0.5, 1]}, "hot_pixel_fraction": {"uniform": [0, 0.001]},
       "illuminators": {"led_left": {"power_scale": {"uniform": [0.5, 1]}}, "led_right": {"on": false}}})");
   EXPECT_GE(spec.parameters.size(), 30u);
   const Scene& base = spec.scene;
@@ -282,6 +282,15 @@ TEST(DatasetSpec, EveryParameterReachesTheScene) {
     EXPECT_FALSE(sensor.noise);
     EXPECT_EQ(*sensor.focus_distance_mm, v("focus_distance_mm"));
     EXPECT_EQ(sensor.bits, 12);
+    EXPECT_EQ(sensor.corner_illumination, v("corner_illumination"));
+    EXPECT_EQ(sensor.hot_pixel_fraction, v("hot_pixel_fraction"));
+    EXPECT_FALSE(sensor.jpeg_quality.has_value());
+  }
+  // JPEG only at 8 bits (the other test's bits are 12).
+  const DatasetSpec jpeg = spec_with(R"("parameters": {"jpeg_quality": {"choice": [40, 90]}})");
+  for (std::uint64_t k : {0u, 1u, 2u}) {
+    const ImageDraw d = draw_image(jpeg, k);
+    EXPECT_EQ(scene_for_image(jpeg, d).cameras[0].sensor().jpeg_quality, column(jpeg, d, "jpeg_quality"));
   }
 }
 
@@ -412,6 +421,10 @@ const Malformed kMalformed[] = {
      "parameters.pupil_radius_mm.weights = [1e+308, 1e+308, 0]: must have a finite sum"},
     {R"("parameters": {"focus_distance_mm": {"uniform": [10, 600]}})",
      "parameters.focus_distance_mm: reaches 10 mm: must stay beyond camera 'cam0''s focal length, 16 mm"},
+    {R"("parameters": {"jpeg_quality": 0})", "parameters.jpeg_quality = 0: must be in [1, 100] (jpeg_quality)"},
+    {R"("parameters": {"jpeg_quality": 80, "bits": {"choice": [8, 10]}})",
+     "parameters.jpeg_quality: camera 'cam0' would get a JPEG of more than 8 bits: JPEG holds 8 bits"},
+    {R"("parameters": {"corner_illumination": 0})", "parameters.corner_illumination = 0: must be in (0, 1] (corner_illumination)"},
     {R"("parameters": {"kappa_horizontal_deg": "5"})", "parameters.kappa_horizontal_deg = \"5\": must be a number"},
 };
 

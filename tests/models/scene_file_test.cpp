@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <cstdint>
 #include <map>
 #include <numbers>
 #include <set>
@@ -312,6 +313,30 @@ TEST(SceneFile, ReadsEverySensorKey) {
   EXPECT_NEAR(scene.cameras[0].focal_length_mm(), 16, 1e-12);
 }
 
+TEST(SceneFile, ReadsTheSensorsRealismKeysAndWritesThemOnlyWhenSet) {
+  const Scene scene = parse_scene(camera_with_sensor(R"({ "corner_illumination": 0.6,
+      "hot_pixel_fraction": 0.0005, "hot_pixel_e_per_s": 3e5, "hot_pixel_seed": 9007199254740991,
+      "jpeg_quality": 70 })"),
+                                  "s.json");
+  const Sensor& sensor = scene.cameras[0].sensor();
+  EXPECT_EQ(sensor.corner_illumination, 0.6);
+  EXPECT_EQ(sensor.hot_pixel_fraction, 0.0005);
+  EXPECT_EQ(sensor.hot_pixel_e_per_s, 3e5);
+  EXPECT_EQ(sensor.hot_pixel_seed, (std::uint64_t{1} << 53) - 1);
+  EXPECT_EQ(sensor.jpeg_quality, 70);
+  const Sensor back = parse_scene(scene_to_json(scene), "back.json").cameras[0].sensor();
+  EXPECT_EQ(back.corner_illumination, 0.6);
+  EXPECT_EQ(back.hot_pixel_fraction, 0.0005);
+  EXPECT_EQ(back.hot_pixel_e_per_s, 3e5);
+  EXPECT_EQ(back.hot_pixel_seed, (std::uint64_t{1} << 53) - 1);
+  EXPECT_EQ(back.jpeg_quality, 70);
+  // A scene without them writes none of them (its file reads as before).
+  const std::string plain = scene_to_json(parse_scene(camera_with_sensor("{}"), "s.json"));
+  for (const char* key : {"corner_illumination", "hot_pixel", "jpeg_quality"}) {
+    EXPECT_EQ(plain.find(key), std::string::npos) << key;
+  }
+}
+
 TEST(SceneFile, WithoutASensorBlockTheCameraHasTheDocumentedDefaults) {
   // The values of the table in docs/scene-format.md, not Sensor{}'s: a
   // changed default must be documented.
@@ -332,6 +357,11 @@ TEST(SceneFile, WithoutASensorBlockTheCameraHasTheDocumentedDefaults) {
   EXPECT_EQ(sensor.psf_sigma_px, 0.5);
   EXPECT_FALSE(sensor.focus_distance_mm.has_value());
   EXPECT_TRUE(sensor.noise);
+  EXPECT_EQ(sensor.corner_illumination, 1);
+  EXPECT_EQ(sensor.hot_pixel_fraction, 0);
+  EXPECT_EQ(sensor.hot_pixel_e_per_s, 2e6);
+  EXPECT_EQ(sensor.hot_pixel_seed, 1u);
+  EXPECT_FALSE(sensor.jpeg_quality.has_value());
 }
 
 TEST(SceneFile, SensorPitchWithPixelIntrinsicsGivesTheFocalLengthInMm) {
@@ -348,7 +378,9 @@ TEST(SceneFile, SensorRangesAreInclusiveWhereDocumented) {
   for (const char* ok : {R"({ "quantum_efficiency": 1 })", R"({ "read_noise_e": 0 })",
                          R"({ "psf_sigma_px": 0 })", R"({ "psf_sigma_px": 20 })",
                          R"({ "bits": 8 })", R"({ "bits": 10 })", R"({ "bits": 16 })",
-                         R"({ "focus_distance_mm": 16.001 })", R"({})"}) {
+                         R"({ "focus_distance_mm": 16.001 })", R"({ "corner_illumination": 1 })",
+                         R"({ "hot_pixel_fraction": 0.01 })", R"({ "hot_pixel_e_per_s": 0 })",
+                         R"({ "jpeg_quality": 1 })", R"({ "jpeg_quality": 100 })", R"({})"}) {
     EXPECT_EQ(parse_error(camera_with_sensor(ok)), "") << ok;
   }
   const std::map<std::string, std::string> bad = {
@@ -364,6 +396,14 @@ TEST(SceneFile, SensorRangesAreInclusiveWhereDocumented) {
       {R"({ "focus_distance_mm": -600 })", "sensor.focus_distance_mm = -600: must be > the focal length"},
       {R"({ "noise": 1 })", "sensor.noise = 1: must be true or false"},
       {R"([])", "cameras[0].sensor = []: must be an object"},
+      {R"({ "corner_illumination": 0 })", "sensor.corner_illumination = 0: must be > 0 and <= 1"},
+      {R"({ "corner_illumination": 1.2 })", "sensor.corner_illumination = 1.2: must be > 0 and <= 1"},
+      {R"({ "hot_pixel_fraction": 0.02 })", "sensor.hot_pixel_fraction = 0.02: must be between 0 and 0.01"},
+      {R"({ "hot_pixel_e_per_s": -1 })", "sensor.hot_pixel_e_per_s = -1: must be >= 0"},
+      {R"({ "hot_pixel_seed": -1 })", "sensor.hot_pixel_seed = -1: must be >= 0"},
+      {R"({ "jpeg_quality": 0 })", "sensor.jpeg_quality = 0: must be an integer from 1 to 100"},
+      {R"({ "jpeg_quality": 75.5 })", "sensor.jpeg_quality = 75.5: must be an integer"},
+      {R"({ "bits": 10, "jpeg_quality": 75 })", "sensor.jpeg_quality = 75: needs 8-bit images (bits = 10)"},
   };
   for (const auto& [sensor, expected] : bad) {
     const std::string message = parse_error(camera_with_sensor(sensor));
@@ -986,9 +1026,9 @@ const std::map<std::string, std::string> kMalformed = {
      "cameras[0].sensor.quantum_efficiency = 1.2: must be > 0 and <= 1"},
     {"sensor_read_noise_negative", "cameras[0].sensor.read_noise_e = -1: must be >= 0"},
     {"sensor_unknown_key",
-     "cameras[0].sensor.exposure_ms = 4: unknown key (valid keys here: bits, exposure_s, f_number, "
-     "focus_distance_mm, full_well_e, gain, noise, pixel_pitch_mm, psf_sigma_px, quantum_efficiency, "
-     "read_noise_e)"},
+     "cameras[0].sensor.exposure_ms = 4: unknown key (valid keys here: bits, corner_illumination, exposure_s, "
+     "f_number, focus_distance_mm, full_well_e, gain, hot_pixel_e_per_s, hot_pixel_fraction, hot_pixel_seed, "
+     "jpeg_quality, noise, pixel_pitch_mm, psf_sigma_px, quantum_efficiency, read_noise_e)"},
     {"syntax_missing_comma", "invalid JSON (byte 213): parse error at line 9, column 22"},
     {"top_level_array", "(top level) = [1, 2, 3]: must be an object"},
     {"two_eye_positions", "eyes[0].position: give exactly one of cornea_center_mm and rotation_center_mm"},

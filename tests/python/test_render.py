@@ -170,6 +170,25 @@ def test_lashes_are_a_class_and_labels_say_what_hides_a_point():
     assert all(p.u_px is not None for p in border if p.status == "occluded")
 
 
+def test_a_sensors_realism_reaches_the_image_and_its_labels(tmp_path):
+    d = purkinje.load_scene(SOURCE_DIR / "assets/scenes/headset.json").to_dict()
+    d["cameras"][0]["sensor"].update({"hot_pixel_fraction": 0.002, "hot_pixel_e_per_s": 1e7})
+    raw = purkinje.render(purkinje.parse_scene(d), noise=False)
+    d["cameras"][0]["sensor"].update({"corner_illumination": 0.5, "jpeg_quality": 30})
+    scene = purkinje.parse_scene(d)
+    sensor = scene.cameras[0].sensor
+    assert (sensor.corner_illumination, sensor.hot_pixel_fraction, sensor.jpeg_quality) == (0.5, 0.002, 30)
+    result = purkinje.render(scene, noise=False)
+    hot = json.loads(result.write(tmp_path)["labels"].read_text())["render"]["hot_pixels"]
+    assert len(hot) > 100
+    # 1e7 e/s over 1 ms, 0.5 to 1.5 times: 5000 to 15000 electrons, saturated
+    # above the full well (10000 e = 255 DN) and well above the dark rim.
+    assert all(raw.image[p["y_px"], p["x_px"]] >= min(255, p["dark_e"] * 255 / 1e4) - 1 for p in hot)
+    # Darker corners; a JPEG's blocks change pixels the hot ones leave alone.
+    assert result.electrons[0, 0] == pytest.approx(raw.electrons[0, 0] * 0.5, rel=0.01)
+    assert (result.image != raw.image).mean() > 0.3
+
+
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():
     import subprocess
     import sys

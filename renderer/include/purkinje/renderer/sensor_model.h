@@ -6,6 +6,7 @@
 // depend on thread count or order.
 
 #include <cstdint>
+#include <vector>
 
 #include "purkinje/models/camera.h"
 #include "purkinje/models/camera_optics.h"
@@ -54,6 +55,23 @@ void blur(const ImagePlane& plane, const PointSpread& psf, ImagePlane& out, Imag
 void add_point_image(ImagePlane& electrons, double u, double v, double total_electrons,
                      const PointSpread& psf, const double source_cov_px2[3]);
 
+// Lens vignetting beyond the natural cos^4 at image position (u, v):
+// 1 - (1 - sensor.corner_illumination) rho^2, rho the distance from the
+// principal point over that of the farthest image corner (the pixel
+// edges', half a pixel beyond the corner pixels' centres).
+double lens_illumination(const Camera& camera, double u, double v);
+
+// A sensor's hot pixels in an image of width x height: pixel (x, y) is hot
+// when a counter-based draw keyed by (hot_pixel_seed, y * width + x) falls
+// below hot_pixel_fraction; its dark charge over the exposure is
+// hot_pixel_e_per_s * exposure_s * (0.5 + another draw). The same pixels
+// and charges in every image of the sensor; none when the fraction is 0.
+struct HotPixel {
+  int x = 0, y = 0;
+  double dark_e = 0;
+};
+std::vector<HotPixel> hot_pixels(const Sensor& sensor, int width, int height);
+
 // Noise (when sensor.noise), full-well clipping, gain and quantization:
 // DN = round(clip(e, 0, full well) * gain * (2^bits - 1) / full well),
 // clipped to 2^bits - 1. NaN or negative electrons count as 0; +inf saturates.
@@ -61,9 +79,18 @@ void add_point_image(ImagePlane& electrons, double u, double v, double total_ele
 // transformed rejection (PTRS) above, normal only above 1e10; read noise
 // Gaussian (ziggurat). Both are drawn from a counter-based generator keyed by
 // (seed, pixel index): the image does not depend on the thread count.
+// Hot pixels' dark charge (hot_pixels) is added to their light before the
+// noise, with or without it: they are a fixed pattern, not noise.
 // Throws std::invalid_argument for bits other than 8, 10, 12 or 16 and for
 // a full well <= 0 or a negative gain or read noise.
 SensorImage expose(const ImagePlane& electrons, const Sensor& sensor, std::uint64_t seed);
+
+// The sensor image as a camera streaming MJPEG delivers it: encoded as a
+// baseline JPEG of `quality` (1-100, libjpeg's scaling of its standard
+// tables; one grey channel, so no chroma subsampling) and decoded again,
+// in place. Throws std::invalid_argument unless the image has 8 bits and
+// the quality is in range.
+void compress_jpeg(SensorImage& image, int quality);
 
 // A counter-based random number in [0, 1) from (seed, stream, index): the
 // same inputs always give the same number. The renderer's own streams

@@ -1,0 +1,229 @@
+// The sensor's realism beyond noise: lens vignetting, hot pixels, MJPEG
+// compression (models/sensor.h). Expected values by hand, or from OpenCV's
+// own JPEG round trip.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "purkinje/models/scene_file.h"
+#include "purkinje/renderer/image_io.h"
+#include "purkinje/renderer/render.h"
+#include "purkinje/renderer/sensor_model.h"
+
+namespace purkinje::renderer {
+namespace {
+
+// A 640 x 480 camera whose principal point is off centre, at (300, 200):
+// its farthest pixel edge corner is (639.5, 479.5), 339.5 and 279.5 px away.
+Camera camera_with(const Sensor& sensor) {
+  Intrinsics k;
+  k.fx = k.fy = 800;
+  k.cx = 300;
+  k.cy = 200;
+  k.width = 640;
+  k.height = 480;
+  return Camera("cam", k, Distortion{}, Pose{}, sensor);
+}
+
+TEST(LensIllumination, FallsQuadraticallyToTheCornerValue) {
+  Sensor sensor;
+  sensor.corner_illumination = 0.4;
+  const Camera camera = camera_with(sensor);
+  const double far2 = 339.5 * 339.5 + 279.5 * 279.5;
+  EXPECT_DOUBLE_EQ(lens_illumination(camera, 300, 200), 1.0);
+  EXPECT_NEAR(lens_illumination(camera, 639.5, 479.5), 0.4, 1e-15);
+  // Halfway to that corner: 1 - 0.6 / 4.
+  EXPECT_NEAR(lens_illumination(camera, 300 + 339.5 / 2, 200 + 279.5 / 2), 0.85, 1e-15);
+  // The nearest corner, (-0.5, -0.5): 300.5 and 200.5 px away.
+  EXPECT_NEAR(lens_illumination(camera, -0.5, -0.5), 1 - 0.6 * (300.5 * 300.5 + 200.5 * 200.5) / far2, 1e-15);
+  sensor.corner_illumination = 1;
+  EXPECT_EQ(lens_illumination(camera_with(sensor), 639.5, 479.5), 1.0);
+  sensor.corner_illumination = 0;
+  EXPECT_THROW(lens_illumination(camera_with(sensor), 0, 0), std::invalid_argument);
+}
+
+TEST(HotPixels, AreAFixedPatternOfTheGivenFractionAndCharge) {
+  Sensor sensor;
+  sensor.hot_pixel_fraction = 0.001;
+  sensor.hot_pixel_e_per_s = 1e6;
+  sensor.exposure_s = 0.002;
+  const std::vector<HotPixel> hot = hot_pixels(sensor, 1000, 1000);
+  // Binomial(1e6, 1e-3): mean 1000, sigma 31.6; within 4 sigma.
+  EXPECT_NEAR(static_cast<double>(hot.size()), 1000, 127);
+  double sum = 0;
+  std::set<std::pair<int, int>> places;
+  for (const HotPixel& p : hot) {
+    EXPECT_GE(p.dark_e, 1000);  // 1e6 e/s x 2 ms x [0.5, 1.5)
+    EXPECT_LT(p.dark_e, 3000);
+    sum += p.dark_e;
+    places.insert({p.x, p.y});
+    ASSERT_TRUE(p.x >= 0 && p.x < 1000 && p.y >= 0 && p.y < 1000);
+  }
+  EXPECT_EQ(places.size(), hot.size());
+  // Mean 2000 e, sigma of the mean 1000 / sqrt(12 n) ~ 9 e.
+  EXPECT_NEAR(sum / static_cast<double>(hot.size()), 2000, 40);
+  // The same pixels again; another seed, other pixels; none at fraction 0.
+  const std::vector<HotPixel> again = hot_pixels(sensor, 1000, 1000);
+  ASSERT_EQ(again.size(), hot.size());
+  for (std::size_t i = 0; i < hot.size(); ++i) EXPECT_TRUE(again[i].x == hot[i].x && again[i].dark_e == hot[i].dark_e);
+  sensor.hot_pixel_seed = 2;
+  int shared = 0;
+  for (const HotPixel& p : hot_pixels(sensor, 1000, 1000)) shared += static_cast<int>(places.count({p.x, p.y}));
+  EXPECT_LT(shared, 10);  // ~1 expected by chance
+  sensor.hot_pixel_fraction = 0;
+  EXPECT_TRUE(hot_pixels(sensor, 1000, 1000).empty());
+  sensor.hot_pixel_fraction = 0.02;
+  EXPECT_THROW(hot_pixels(sensor, 10, 10), std::invalid_argument);
+}
+
+TEST(HotPixels, AddTheirChargeToTheImageWithoutNoiseAndWithIt) {
+  Sensor sensor;
+  sensor.hot_pixel_fraction = 0.01;
+  sensor.hot_pixel_e_per_s = 1e6;
+  sensor.exposure_s = 0.002;
+  sensor.bits = 16;
+  sensor.full_well_e = 65535;  // DN = electrons
+  sensor.noise = false;
+  ImagePlane light(200, 100);
+  std::fill(light.values.begin(), light.values.end(), 100.0f);
+  const std::vector<HotPixel> hot = hot_pixels(sensor, 200, 100);
+  ASSERT_GT(hot.size(), 100u);
+  const SensorImage image = expose(light, sensor, 7);
+  std::vector<double> expected(light.values.size(), 100);
+  for (const HotPixel& p : hot) expected[static_cast<std::size_t>(p.y) * 200 + p.x] += p.dark_e;
+  for (std::size_t i = 0; i < expected.size(); ++i) ASSERT_EQ(image.values[i], std::round(expected[i])) << i;
+  // With noise: Poisson about light + dark (sigma ~ 45 e): within 6 sigma.
+  sensor.noise = true;
+  sensor.read_noise_e = 0;
+  const SensorImage noisy = expose(light, sensor, 7);
+  for (const HotPixel& p : hot) {
+    const double mean = 100 + p.dark_e;
+    EXPECT_NEAR(noisy.values[static_cast<std::size_t>(p.y) * 200 + p.x], mean, 6 * std::sqrt(mean));
+  }
+}
+
+// An 8-bit test card: a gradient, a disc (an edge at every angle) and fine
+// stripes, whose blocks JPEG quantizes differently.
+SensorImage test_card() {
+  SensorImage image;
+  image.width = 96;
+  image.height = 72;
+  image.bits = 8;
+  image.values.resize(96 * 72);
+  for (int y = 0; y < 72; ++y) {
+    for (int x = 0; x < 96; ++x) {
+      int v = 30 + 2 * x;
+      if ((x - 50) * (x - 50) + (y - 36) * (y - 36) < 400) v = 220;
+      if (y > 60) v = (x % 3 == 0) ? 240 : 20;
+      image.values[static_cast<std::size_t>(y) * 96 + x] = static_cast<unsigned short>(v);
+    }
+  }
+  return image;
+}
+
+// What OpenCV (libjpeg, its standard tables scaled to the quality) makes of
+// the same image.
+std::vector<unsigned short> through_opencv(const SensorImage& image, int quality) {
+  cv::Mat grey(image.height, image.width, CV_8UC1);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      grey.at<unsigned char>(y, x) = static_cast<unsigned char>(image.values[static_cast<std::size_t>(y) * image.width + x]);
+    }
+  }
+  std::vector<unsigned char> bytes;
+  cv::imencode(".jpg", grey, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+  const cv::Mat decoded = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+  std::vector<unsigned short> out;
+  for (int y = 0; y < decoded.rows; ++y) {
+    for (int x = 0; x < decoded.cols; ++x) out.push_back(decoded.at<unsigned char>(y, x));
+  }
+  return out;
+}
+
+double mean_absolute_change(const SensorImage& a, const SensorImage& b) {
+  double sum = 0;
+  for (std::size_t i = 0; i < a.values.size(); ++i) sum += std::abs(double(a.values[i]) - double(b.values[i]));
+  return sum / static_cast<double>(a.values.size());
+}
+
+TEST(CompressJpeg, GivesLibjpegsPixelsAtTheQualityAsked) {
+  const SensorImage card = test_card();
+  double previous_change = 1e9;
+  for (int quality : {10, 50, 75, 95}) {
+    SensorImage image = card;
+    compress_jpeg(image, quality);
+    EXPECT_EQ(image.values, through_opencv(card, quality)) << "quality " << quality;
+    const double change = mean_absolute_change(image, card);
+    EXPECT_GT(change, 0) << quality;
+    EXPECT_LT(change, previous_change) << quality;  // less loss at higher quality
+    previous_change = change;
+  }
+}
+
+TEST(CompressJpeg, RejectsDeepImagesAndQualitiesOutOfRange) {
+  SensorImage image = test_card();
+  EXPECT_THROW(compress_jpeg(image, 0), std::invalid_argument);
+  EXPECT_THROW(compress_jpeg(image, 101), std::invalid_argument);
+  image.bits = 10;
+  EXPECT_THROW(compress_jpeg(image, 75), std::invalid_argument);
+}
+
+Scene bundled(const std::string& name) {
+  return load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
+}
+
+Scene with_sensor(Scene scene, const Sensor& sensor) {
+  Camera& c = scene.cameras.at(0);
+  c = Camera(c.name(), c.intrinsics(), c.distortion(), c.world_from_camera(), sensor);
+  return scene;
+}
+
+// The lens's vignetting scales every pixel's light and every glint by
+// lens_illumination at its place: the ratio of two renders of one scene,
+// with and without it, is the closed form wherever the light is not
+// clipped (no noise; radiance is untouched).
+TEST(LensIllumination, ScalesTheRenderedLightAndTheGlints) {
+  const Scene plain = bundled("headset");
+  Sensor sensor = plain.cameras[0].sensor();
+  sensor.corner_illumination = 0.5;
+  const Scene vignetted = with_sensor(plain, sensor);
+  RenderOptions options;
+  options.noise = false;
+  options.edge_samples_per_pixel = 0;
+  const RenderResult a = render(plain, 0, options), b = render(vignetted, 0, options);
+  // The light is blurred after the vignetting: a pixel's ratio mixes its
+  // neighbours' factors, which differ from its own by at most the factor's
+  // slope, 2 (1 - corner) rho / far <= 1 / far = 1 / 283 per pixel here.
+  const Camera& camera = vignetted.cameras[0];
+  int compared = 0;
+  for (int y = 5; y < a.electrons.height - 5; y += 7) {
+    for (int x = 5; x < a.electrons.width - 5; x += 7) {
+      if (!(a.electrons.at(x, y) > 10)) continue;
+      EXPECT_NEAR(b.electrons.at(x, y) / a.electrons.at(x, y), lens_illumination(camera, x, y), 1.0 / 283) << x << ", " << y;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 1000);
+  EXPECT_EQ(a.radiance.values, b.radiance.values);
+  ASSERT_EQ(a.glints.size(), b.glints.size());
+  int glints = 0;
+  for (std::size_t i = 0; i < a.glints.size(); ++i) {
+    if (a.glints[i].status != PathStatus::ok) continue;
+    const Pixel p = a.truth.views[0].glints[a.glints[i].illuminator].pixel;
+    EXPECT_NEAR(b.glints[i].electrons / a.glints[i].electrons, lens_illumination(camera, p.u, p.v), 1e-12);
+    ++glints;
+  }
+  EXPECT_GT(glints, 4);
+}
+
+}  // namespace
+}  // namespace purkinje::renderer

@@ -92,6 +92,8 @@ const std::vector<ParameterRule>& scene_rules() {
       {"head_yaw_deg", T::real, -90, 90},
       {"head_pitch_deg", T::real, -90, 90},
       {"head_roll_deg", T::real, -90, 90},
+      {"gaze_speed_deg_s", T::real, 0, 1000},
+      {"gaze_speed_direction_deg", T::real, -360, 360},
       {"lid_opening", T::real, 0, 1},
       {"blink", T::boolean}},
       face_rules(), lash_rules(), std::vector<ParameterRule>{
@@ -439,6 +441,9 @@ struct Reader {
       where.at(given("screen_x_mm") ? "screen_x_mm" : "screen_y_mm")
           .fail("", "gaze is given by a turn and by a screen target: give one");
     }
+    if (given("gaze_speed_direction_deg") && !given("gaze_speed_deg_s")) {
+      where.at("gaze_speed_direction_deg").fail("", "a direction without gaze_speed_deg_s: give the speed too");
+    }
     for (const char* axis : {"screen_x_mm", "screen_y_mm"}) {
       if (!given(axis)) continue;
       if (!scene.screen) where.at(axis).fail("", "the scene has no screen (scene-format.md: screen)");
@@ -781,6 +786,14 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
     }
   }
   scene.eyes.front().set_appearance(look);
+  // The motion during the exposure: the scene's, or the drawn speed along
+  // the drawn direction (0 deg: yaw, toward +x; 90 deg: pitch, up).
+  EyeMotion motion = base.motion();
+  if (const auto speed = value("gaze_speed_deg_s")) {
+    const double a = value("gaze_speed_direction_deg").value_or(0) * kDegree;
+    motion = {*speed * std::cos(a), *speed * std::sin(a)};
+  }
+  scene.eyes.front().set_motion(motion);
   // A moved eye must not swallow a camera or a light: the scene reader's
   // rule, here by the sphere around the centre of rotation that holds the
   // sclera and the corneal apex.

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -89,6 +90,19 @@ Rotation world_from_eye_rotation(const UnitVector3& o) {
 Eye::Eye(EyeModel model, const Pose& world_from_eye)
     : model_(std::move(model)), world_from_eye_(world_from_eye),
       eye_from_world_(world_from_eye.inverse()) {}
+
+Eye Eye::at_time(double t_s) const {
+  if (t_s == 0 || motion_.still()) return *this;
+  const UnitVector3 o = optical_axis();
+  const double pitch = std::asin(std::clamp(-o.y(), -1.0, 1.0)), yaw = std::atan2(o.x(), -o.z());
+  constexpr double kRadPerDeg = std::numbers::pi / 180;
+  const UnitVector3 turned = optical_axis_from_yaw_pitch(yaw + motion_.yaw_deg_s * kRadPerDeg * t_s,
+                                                         pitch + motion_.pitch_deg_s * kRadPerDeg * t_s);
+  Eye eye = with_rotation_center(model_, rotation_center(), turned);
+  eye.appearance_ = appearance_;
+  eye.motion_ = motion_;
+  return eye;
+}
 
 Eye Eye::with_cornea_center(EyeModel model, const Point3& c, const UnitVector3& o) {
   return Eye(std::move(model), Pose(world_from_eye_rotation(o), c.from_origin()));

@@ -76,6 +76,7 @@ Scene with_eye_variation(const Scene& scene, const EyeVariation& v, int eye_inde
   model.pupil_radius_mm = v.pupil_radius_mm;
   Eye turned(model, about_rotation_center * eye.world_from_eye());
   turned.set_appearance(eye.appearance());
+  turned.set_motion(eye.motion());
   Scene out = scene;
   out.eyes[eye_index] = turned;
   return out;

@@ -127,6 +127,11 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   out["pupil_radius_mm"] = number(t.pupil_radius_mm);
   out["optical_axis"] = vector(t.optical_axis);
   out["visual_axis"] = vector(t.visual_axis);
+  // Only for an eye that turns during the exposure: its pose above is the
+  // one at mid-exposure.
+  if (!eye.motion().still()) {
+    out["motion"] = {{"yaw_deg_s", number(eye.motion().yaw_deg_s)}, {"pitch_deg_s", number(eye.motion().pitch_deg_s)}};
+  }
   out["kappa_deg"] = {{"horizontal", degrees(m.kappa_horizontal_rad)},
                       {"vertical", degrees(m.kappa_vertical_rad)}};
   out["posterior_cornea"] = m.posterior_cornea.has_value();

@@ -579,6 +579,14 @@ Eye read_eye(Object& e) {
                            : Eye::with_rotation_center(model, anchor_point, axis);
   }
   orientation.finish();
+  // A saccade peaks at 500 to 900 deg/s; beyond 1000 no eye turns.
+  if (auto motion = e.optional_object("motion")) {
+    EyeMotion m;
+    m.yaw_deg_s = motion->within_or("yaw_deg_s", -1000, 1000, 0);
+    m.pitch_deg_s = motion->within_or("pitch_deg_s", -1000, 1000, 0);
+    motion->finish();
+    eye->set_motion(m);
+  }
   eye->set_appearance(read_appearance(e));
   e.finish();
   return *eye;
@@ -767,6 +775,7 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
   o["kappa_deg"] = {{"horizontal", m.kappa_horizontal_rad / kDegree}, {"vertical", m.kappa_vertical_rad / kDegree}};
   o["position"] = {{"cornea_center_mm", point(eye.cornea_center())}};
   o["orientation"] = {{"optical_axis", direction(eye.optical_axis())}};
+  if (!eye.motion().still()) o["motion"] = {{"yaw_deg_s", eye.motion().yaw_deg_s}, {"pitch_deg_s", eye.motion().pitch_deg_s}};
   const EyeAppearance& a = eye.appearance();
   o["appearance"] = {{"iris_albedo", a.iris_albedo},
                      {"iris_texture_contrast", a.iris_texture_contrast},

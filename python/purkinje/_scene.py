@@ -139,6 +139,7 @@ def eye(
     eyelids: Optional[Mapping[str, float]] = None,
     face: Optional[Mapping[str, Any]] = None,
     head: Optional[Mapping[str, Sequence[float]]] = None,
+    motion: Optional[Mapping[str, float]] = None,
 ) -> dict:
     """An eye entry for build_scene ("Eyes"): a preset (`model`, see
     eye_model_presets()) with overrides, placed by `position`
@@ -146,12 +147,13 @@ def eye(
     `orientation` (yaw_deg/pitch_deg, optical_axis or gaze_target_mm;
     default: looking along world -z). `eyelids` and `face` (with eyelids:
     the periocular face in place of the lid sphere and wall) take the
-    scene format's keys."""
+    scene format's keys; `motion` ({"yaw_deg_s": ..., "pitch_deg_s": ...})
+    turns the eye during the exposure (a saccade's motion blur)."""
     return _entry(model=model, cornea=cornea, posterior_cornea=posterior_cornea, aqueous_index=aqueous_index,
                   iris=iris, pupil=pupil, rotation_center_depth_mm=rotation_center_depth_mm,
                   sclera_radius_mm=sclera_radius_mm, kappa_deg=kappa_deg, position=position,
                   orientation=orientation if orientation is not None else {}, appearance=appearance,
-                  eyelids=eyelids, face=face, head=head)
+                  eyelids=eyelids, face=face, head=head, motion=motion)
 
 
 def mesh(

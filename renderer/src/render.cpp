@@ -350,8 +350,11 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
   return result;
 }
 
-void render(const Scene& scene, int camera_index, const RenderOptions& options, RenderResult& result) {
-  validate(scene, camera_index, options);
+namespace {
+
+// The scene's light at one instant: everything render() gives but the
+// sensor image (options validated).
+void render_instant(const Scene& scene, int camera_index, const RenderOptions& options, RenderResult& result) {
   const Camera& camera = scene.cameras[camera_index];
   const Intrinsics& k = camera.intrinsics();
   const int width = k.width, height = k.height;
@@ -444,16 +447,86 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
                options.per_light_glint_masks ? &glint_planes : nullptr, result.glints);
   for (std::size_t i = 0; i < glint_total.values.size(); ++i) result.electrons.values[i] += glint_total.values[i];
 
-  Sensor sensor = camera.sensor();
-  if (!options.noise) sensor.noise = false;
-  arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
-  if (sensor.jpeg_quality) compress_jpeg(result.sensor, *sensor.jpeg_quality);
-
   film.add_aovs(result.aovs, pool, scene_has_lashes(scene));
   result.aovs.push_back({"glint", fraction_of_signal(glint_total, result.electrons)});
   for (std::size_t l = 0; l < glint_planes.size(); ++l) {
     result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l], result.electrons)});
   }
+}
+
+// Motion blur renders this many instants at most: an eye whose image
+// moves farther during the exposure is refused.
+constexpr double kMaxTravelPx = 128;
+
+// The instants (s from mid-exposure) that sample the exposure: {0} when
+// no eye moves; else an odd number, the midpoints of equal slices, enough
+// that the moving eyes' images move at most half a pixel between two
+// (their corneal apex and pupil centre, seen from this camera).
+std::vector<double> exposure_instants(const Scene& scene, const Camera& camera) {
+  const double exposure = camera.sensor().exposure_s;
+  double travel_px = 0;
+  for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+    const Eye& eye = scene.eyes[e];
+    if (eye.motion().still()) continue;
+    const Eye first = eye.at_time(-exposure / 2), last = eye.at_time(exposure / 2);
+    for (const auto& [a, b] : {std::pair{first.corneal_apex(), last.corneal_apex()},
+                               std::pair{first.pupil_center(), last.pupil_center()}}) {
+      const Projection pa = camera.project(a), pb = camera.project(b);
+      if (pa.status == ProjectionStatus::behind_camera || pb.status == ProjectionStatus::behind_camera) continue;
+      travel_px = std::max(travel_px, std::hypot(pa.pixel.u - pb.pixel.u, pa.pixel.v - pb.pixel.v));
+    }
+    if (travel_px > kMaxTravelPx) {
+      throw std::invalid_argument("render: eyes[" + std::to_string(e) + "] moves " + check::format_number(travel_px) +
+                                  " px in camera " + camera.name() + " during its exposure: motion blur renders at most " +
+                                  check::format_number(kMaxTravelPx) + " px (a shorter exposure_s or a slower motion)");
+    }
+  }
+  if (travel_px == 0) return {0.0};
+  const int frames = 2 * static_cast<int>(std::ceil(travel_px)) + 1;
+  std::vector<double> instants(frames);
+  for (int k = 0; k < frames; ++k) instants[k] = ((k + 0.5) / frames - 0.5) * exposure;
+  instants[frames / 2] = 0;  // exactly
+  return instants;
+}
+
+}  // namespace
+
+void render(const Scene& scene, int camera_index, const RenderOptions& options, RenderResult& result) {
+  validate(scene, camera_index, options);
+  const Camera& camera = scene.cameras[camera_index];
+  const std::vector<double> instants = exposure_instants(scene, camera);
+  const int frames = static_cast<int>(instants.size()), middle = frames / 2;
+  if (frames == 1) {
+    render_instant(scene, camera_index, options, result);
+  } else {
+    // Motion blur: the light of every instant summed; the labels, radiance
+    // and AOVs are the mid-exposure instant's (the scene as given).
+    std::vector<double> sum;
+    RenderResult other;
+    Scene moved = scene;
+    for (int k = 0; k < frames; ++k) {
+      RenderOptions instant_options = options;
+      if (options.progress) {
+        instant_options.progress = [&options, k, frames](double f) { options.progress((k + f) / frames); };
+      }
+      RenderResult& target = k == middle ? result : other;
+      if (k == middle) {
+        render_instant(scene, camera_index, instant_options, result);
+      } else {
+        for (std::size_t e = 0; e < scene.eyes.size(); ++e) moved.eyes[e] = scene.eyes[e].at_time(instants[k]);
+        render_instant(moved, camera_index, instant_options, other);
+      }
+      sum.resize(target.electrons.values.size(), 0.0);
+      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += target.electrons.values[i];
+    }
+    for (std::size_t i = 0; i < sum.size(); ++i) result.electrons.values[i] = static_cast<float>(sum[i] / frames);
+  }
+
+  Sensor sensor = camera.sensor();
+  if (!options.noise) sensor.noise = false;
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
+  if (sensor.jpeg_quality) compress_jpeg(result.sensor, *sensor.jpeg_quality);
 }
 
 }  // namespace purkinje::renderer

@@ -50,6 +50,7 @@ Scene turned(const Scene& version, Aim aim) {
   const Eye& eye = version.eyes.front();
   Eye now = aim(eye);
   now.set_appearance(eye.appearance());
+  now.set_motion(eye.motion());
   scene.eyes = {now};
   return scene;
 }
@@ -334,6 +335,7 @@ namespace {
 Eye with_anatomy(const Eye& eye, const EyeModel& model) {
   Eye changed = Eye::with_rotation_center(model, eye.rotation_center(), eye.optical_axis());
   changed.set_appearance(eye.appearance());
+  changed.set_motion(eye.motion());
   return changed;
 }
 

@@ -286,6 +286,16 @@ TEST(DatasetSpec, EveryParameterReachesTheScene) {
     EXPECT_EQ(sensor.hot_pixel_fraction, v("hot_pixel_fraction"));
     EXPECT_FALSE(sensor.jpeg_quality.has_value());
   }
+  // A saccade: the drawn speed along the drawn direction (0: yaw, 90: pitch).
+  const DatasetSpec moving = spec_with(R"("parameters": {"gaze_speed_deg_s": {"uniform": [100, 600]},
+      "gaze_speed_direction_deg": {"uniform": [0, 360]}})");
+  for (std::uint64_t k : {0u, 1u}) {
+    const ImageDraw d = draw_image(moving, k);
+    const EyeMotion m = scene_for_image(moving, d).eyes[0].motion();
+    const double speed = column(moving, d, "gaze_speed_deg_s"), a = column(moving, d, "gaze_speed_direction_deg") * kDeg;
+    EXPECT_NEAR(m.yaw_deg_s, speed * std::cos(a), 1e-12);
+    EXPECT_NEAR(m.pitch_deg_s, speed * std::sin(a), 1e-12);
+  }
   // JPEG only at 8 bits (the other test's bits are 12).
   const DatasetSpec jpeg = spec_with(R"("parameters": {"jpeg_quality": {"choice": [40, 90]}})");
   for (std::uint64_t k : {0u, 1u, 2u}) {
@@ -421,6 +431,9 @@ const Malformed kMalformed[] = {
      "parameters.pupil_radius_mm.weights = [1e+308, 1e+308, 0]: must have a finite sum"},
     {R"("parameters": {"focus_distance_mm": {"uniform": [10, 600]}})",
      "parameters.focus_distance_mm: reaches 10 mm: must stay beyond camera 'cam0''s focal length, 16 mm"},
+    {R"("parameters": {"gaze_speed_direction_deg": 90})",
+     "parameters.gaze_speed_direction_deg: a direction without gaze_speed_deg_s: give the speed too"},
+    {R"("parameters": {"gaze_speed_deg_s": 1200})", "parameters.gaze_speed_deg_s = 1200: must be in [0, 1000] (gaze_speed_deg_s)"},
     {R"("parameters": {"jpeg_quality": 0})", "parameters.jpeg_quality = 0: must be in [1, 100] (jpeg_quality)"},
     {R"("parameters": {"jpeg_quality": 80, "bits": {"choice": [8, 10]}})",
      "parameters.jpeg_quality: camera 'cam0' would get a JPEG of more than 8 bits: JPEG holds 8 bits"},

@@ -21,6 +21,40 @@ Scene bundled(const std::string& name) {
   return load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name + ".json");
 }
 
+// An eye in motion turns its optical axis's yaw and pitch at the rates
+// given, about its centre of rotation, keeping its look and its motion.
+TEST(EyeMotion, AtATimeTheAxisHasMovedByTheRatesAboutTheRotationCentre) {
+  EyeModel model;
+  Eye eye = Eye::with_rotation_center(model, {5, -3, 600}, optical_axis_from_yaw_pitch(10 * kDeg, 5 * kDeg));
+  EyeAppearance look;
+  look.iris_albedo = 0.3;
+  eye.set_appearance(look);
+  eye.set_motion({300, -100});
+  const Eye later = eye.at_time(0.002);  // 0.6 deg more yaw, 0.2 deg less pitch
+  const UnitVector3 expected = optical_axis_from_yaw_pitch(10.6 * kDeg, 4.8 * kDeg);
+  EXPECT_NEAR(angle_between(later.optical_axis(), expected), 0, 1e-12);
+  EXPECT_NEAR(distance(later.rotation_center(), eye.rotation_center()), 0, 1e-12);
+  EXPECT_EQ(later.appearance().iris_albedo, 0.3);
+  EXPECT_EQ(later.motion().yaw_deg_s, 300);
+  EXPECT_EQ(later.motion().pitch_deg_s, -100);
+  // Backwards in time the other way; no time, or no motion, no turn.
+  EXPECT_NEAR(angle_between(eye.at_time(-0.002).optical_axis(), optical_axis_from_yaw_pitch(9.4 * kDeg, 5.2 * kDeg)), 0,
+              1e-12);
+  EXPECT_EQ(eye.at_time(0).optical_axis().vector(), eye.optical_axis().vector());
+  eye.set_motion({});
+  EXPECT_TRUE(eye.motion().still());
+  EXPECT_EQ(eye.at_time(0.002).optical_axis().vector(), eye.optical_axis().vector());
+}
+
+// A varied eye keeps its motion.
+TEST(EyeVariation, KeepsTheEyesMotion) {
+  Scene scene = bundled("remote");
+  scene.eyes[0].set_motion({250, 40});
+  const Eye& t = with_eye_variation(scene, {10 * kDeg, 0, 2}).eyes[0];
+  EXPECT_EQ(t.motion().yaw_deg_s, 250);
+  EXPECT_EQ(t.motion().pitch_deg_s, 40);
+}
+
 TEST(EyeVariation, TurnsTheGazeByTheAngleTowardTheDirectionAboutTheRotationCentre) {
   const Scene scene = bundled("remote");
   const Eye& eye = scene.eyes[0];

@@ -337,6 +337,29 @@ TEST(SceneFile, ReadsTheSensorsRealismKeysAndWritesThemOnlyWhenSet) {
   }
 }
 
+TEST(SceneFile, AnEyesMotionIsReadAndWrittenOnlyWhenItMoves) {
+  const auto eye_with = [](const std::string& motion) {
+    return R"({ "format": 1, "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16,
+        "pixel_pitch_mm": 0.006, "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+      "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} )" + motion + " } ] }";
+  };
+  const Scene scene = parse_scene(eye_with(R"(, "motion": { "yaw_deg_s": 450, "pitch_deg_s": -1000 })"), "s.json");
+  EXPECT_EQ(scene.eyes[0].motion().yaw_deg_s, 450);
+  EXPECT_EQ(scene.eyes[0].motion().pitch_deg_s, -1000);
+  const Eye back = parse_scene(scene_to_json(scene), "back.json").eyes[0];
+  EXPECT_EQ(back.motion().yaw_deg_s, 450);
+  EXPECT_EQ(back.motion().pitch_deg_s, -1000);
+  EXPECT_EQ(parse_scene(eye_with(R"(, "motion": { "pitch_deg_s": 20 })"), "s.json").eyes[0].motion().yaw_deg_s, 0);
+  const Scene still = parse_scene(eye_with(""), "s.json");
+  EXPECT_TRUE(still.eyes[0].motion().still());
+  EXPECT_EQ(scene_to_json(still).find("motion"), std::string::npos);
+  EXPECT_NE(parse_error(eye_with(R"(, "motion": { "yaw_deg_s": 1500 })")).find(
+                "eyes[0].motion.yaw_deg_s = 1500: must be between -1000 and 1000"),
+            std::string::npos);
+  EXPECT_NE(parse_error(eye_with(R"(, "motion": { "yaw_rate": 10 })")).find("eyes[0].motion.yaw_rate = 10: unknown key"),
+            std::string::npos);
+}
+
 TEST(SceneFile, WithoutASensorBlockTheCameraHasTheDocumentedDefaults) {
   // The values of the table in docs/scene-format.md, not Sensor{}'s: a
   // changed default must be documented.

@@ -1,6 +1,7 @@
-// The sensor's realism beyond noise: lens vignetting, hot pixels, MJPEG
-// compression (models/sensor.h). Expected values by hand, or from OpenCV's
-// own JPEG round trip.
+// What a real camera adds beyond noise: lens vignetting, hot pixels, MJPEG
+// compression (models/sensor.h), and motion blur from an eye that turns
+// during the exposure (models/eye.h). Expected values by hand, from
+// OpenCV's own JPEG round trip, or from the labels' geometry.
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "purkinje/models/scene_file.h"
+#include "purkinje/models/truth.h"
 #include "purkinje/renderer/image_io.h"
 #include "purkinje/renderer/render.h"
 #include "purkinje/renderer/sensor_model.h"
@@ -223,6 +225,131 @@ TEST(LensIllumination, ScalesTheRenderedLightAndTheGlints) {
     ++glints;
   }
   EXPECT_GT(glints, 4);
+}
+
+// A saccade's glints are streaks: with only the glints lit (every albedo
+// 0), each streak's centroid is the time average of its glint's labelled
+// position over the exposure (from the truth of the eye at 201 instants,
+// not the renderer's own instants), and its variance along the motion
+// that of a uniform segment as long as the glint's travel, L^2 / 12, plus
+// the point spread's and the pixel's. The labels are the mid-exposure
+// eye's.
+TEST(MotionBlur, AGlintsStreakIsItsPathOverTheExposure) {
+  Scene scene = bundled("headset");
+  Eye& eye = scene.eyes[0];
+  EyeAppearance dark = eye.appearance();
+  dark.iris_albedo = dark.sclera_albedo = dark.skin_albedo = dark.fundus_reflectance = 0;
+  eye.set_appearance(dark);
+  eye.set_motion({800, 300});
+  Sensor sensor = scene.cameras[0].sensor();
+  sensor.exposure_s = 0.004;  // 3.4 deg of turn
+  scene = with_sensor(scene, sensor);
+  const double exposure = sensor.exposure_s;
+  RenderOptions options;
+  options.noise = false;
+  options.edge_samples_per_pixel = 0;
+  const RenderResult result = render(scene, 0, options);
+  Scene still = scene;
+  still.eyes[0].set_motion({});
+  const SceneTruth mid = compute_truth(still);
+  const RenderResult spots = render(still, 0, options);
+
+  // Each glint's path: its label at 201 instants across the exposure.
+  const std::size_t lights = scene.illuminators.size();
+  constexpr int kInstants = 201;
+  std::vector<double> mean_u(lights), mean_v(lights);
+  std::vector<Pixel> first(lights), last(lights);
+  std::vector<bool> seen(lights, true);
+  for (int k = 0; k < kInstants; ++k) {
+    Scene at = still;
+    at.eyes[0] = scene.eyes[0].at_time((static_cast<double>(k) / (kInstants - 1) - 0.5) * exposure);
+    const SceneTruth truth = compute_truth(at);
+    for (std::size_t l = 0; l < lights; ++l) {
+      const GlintTruth& g = truth.views[0].glints[l];
+      seen[l] = seen[l] && g.status == PathStatus::ok;
+      mean_u[l] += g.pixel.u / kInstants;
+      mean_v[l] += g.pixel.v / kInstants;
+      if (k == 0) first[l] = g.pixel;
+      if (k == kInstants - 1) last[l] = g.pixel;
+    }
+  }
+  // The labels are the eye's at mid-exposure.
+  for (std::size_t l = 0; l < lights; ++l) {
+    EXPECT_EQ(result.truth.views[0].glints[l].pixel.u, mid.views[0].glints[l].pixel.u);
+  }
+
+  const ImagePlane& e = result.electrons;
+  // A plane's centroid and variance along (du, dv) / length in a window.
+  struct Spread {
+    double u = 0, v = 0, along = 0;
+  };
+  const auto spread = [](const ImagePlane& plane, double u, double v, double reach, double du, double dv) {
+    const double length = std::hypot(du, dv);
+    const int x0 = static_cast<int>(u - reach), x1 = static_cast<int>(u + reach) + 1;
+    const int y0 = static_cast<int>(v - reach), y1 = static_cast<int>(v + reach) + 1;
+    double total = 0, su = 0, sv = 0;
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        total += plane.at(x, y);
+        su += plane.at(x, y) * x;
+        sv += plane.at(x, y) * y;
+      }
+    }
+    Spread s{su / total, sv / total, 0};
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const double t = ((x - s.u) * du + (y - s.v) * dv) / length;
+        s.along += plane.at(x, y) * t * t / total;
+      }
+    }
+    return s;
+  };
+  int checked = 0;
+  double longest = 0, worst_px = 0;
+  for (std::size_t l = 0; l < lights; ++l) {
+    if (!seen[l]) continue;
+    const double du = last[l].u - first[l].u, dv = last[l].v - first[l].v, length = std::hypot(du, dv);
+    longest = std::max(longest, length);
+    // A window around the streak that no other glint's streak reaches.
+    const double reach = length / 2 + 4;
+    bool alone = true;
+    for (std::size_t m = 0; m < lights; ++m) {
+      if (m != l && seen[m] && std::hypot(mean_u[m] - mean_u[l], mean_v[m] - mean_v[l]) < 2 * reach + 2) alone = false;
+    }
+    if (!alone) continue;
+    const Spread streak = spread(e, mean_u[l], mean_v[l], reach, du, dv);
+    EXPECT_NEAR(streak.u, mean_u[l], 0.05) << "light " << l;
+    EXPECT_NEAR(streak.v, mean_v[l], 0.05) << "light " << l;
+    // The still glint's own spread (point spread, pixel, LED), plus the
+    // segment's.
+    const Pixel at = mid.views[0].glints[l].pixel;
+    const Spread spot = spread(spots.electrons, at.u, at.v, reach, du, dv);
+    EXPECT_NEAR(streak.along, spot.along + length * length / 12, 0.05 * length * length / 12) << "light " << l;
+    worst_px = std::max(worst_px, std::hypot(streak.u - mean_u[l], streak.v - mean_v[l]));
+    ++checked;
+  }
+  EXPECT_GE(checked, 3);
+  EXPECT_GT(longest, 3);  // streaks, not spots
+  RecordProperty("streaks", checked);
+  RecordProperty("longest_px", std::to_string(longest));
+  RecordProperty("worst_centroid_px", std::to_string(worst_px));
+}
+
+TEST(MotionBlur, AnEyeThatMovesTooFarDuringTheExposureIsRefused) {
+  Scene scene = bundled("headset");
+  scene.eyes[0].set_motion({1000, 0});
+  Sensor sensor = scene.cameras[0].sensor();
+  sensor.exposure_s = 0.5;
+  scene = with_sensor(scene, sensor);
+  RenderResult result;
+  try {
+    render(scene, 0, {}, result);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("render: eyes[0] moves"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("motion blur renders at most 128 px"), std::string::npos) << error.what();
+  }
+  EXPECT_TRUE(result.sensor.values.empty());  // untouched
 }
 
 }  // namespace

@@ -96,6 +96,15 @@ std::optional<AnatomyProblem> anatomy_problem(const EyeModel& m);
 // o = (sin yaw cos pitch, -sin pitch, -cos yaw cos pitch).
 UnitVector3 optical_axis_from_yaw_pitch(double yaw_rad, double pitch_rad);
 
+// How an eye turns during an exposure (a saccade's motion blur): the yaw
+// and pitch of its optical axis (optical_axis_from_yaw_pitch's angles)
+// change at these rates, about its centre of rotation. The eye's pose is
+// the one at mid-exposure.
+struct EyeMotion {
+  double yaw_deg_s = 0, pitch_deg_s = 0;
+  bool still() const { return yaw_deg_s == 0 && pitch_deg_s == 0; }
+};
+
 class Eye {
  public:
   Eye(EyeModel model, const Pose& world_from_eye);
@@ -122,6 +131,13 @@ class Eye {
   // Albedos, iris texture, eyelids: what the renderer needs beyond geometry.
   const EyeAppearance& appearance() const { return appearance_; }
   void set_appearance(const EyeAppearance& appearance) { appearance_ = appearance; }
+  const EyeMotion& motion() const { return motion_; }
+  void set_motion(const EyeMotion& motion) { motion_ = motion; }
+  // The eye `t_s` seconds after mid-exposure: its optical axis's yaw and
+  // pitch moved by the motion's rates times t_s, turned about the centre
+  // of rotation (no torsion: world_from_eye_rotation's frame); appearance
+  // and motion kept. t_s = 0 or a still eye: this eye.
+  Eye at_time(double t_s) const;
   const Pose& world_from_eye() const { return world_from_eye_; }
   const Pose& eye_from_world() const { return eye_from_world_; }
 
@@ -142,6 +158,7 @@ class Eye {
   Pose world_from_eye_;
   Pose eye_from_world_;
   EyeAppearance appearance_;
+  EyeMotion motion_;
 };
 
 // The eye-frame axes for an optical axis o: x = normalize(e_x - (e_x.o) o),

@@ -3,7 +3,7 @@
 # (gaze within 30 deg of the scene's, pupil radius 1 to 4 mm, default
 # noise) and the hard set (100 renders per condition), tracked by
 # purkinje's detectors and scored against their labels. The figures are
-# recorded in docs/trackers.md, "The bars". About 10 minutes on 2 cores.
+# recorded in docs/trackers.md, "The bars". About 15 minutes on 2 cores.
 #
 #   bash scripts/measure-trackers.sh [OUT]      (default OUT: out/trackers-bars)
 #
@@ -36,6 +36,16 @@ for scene in remote headset; do
     measure "${scene}_$condition" "assets/scenes/hard/${scene}_$condition.json" "$hard" --variation-seed 3
   done
 done
+# What real cameras and faces add (issue 26): a cheap streaming camera
+# (JPEG quality 50, 0.1% hot pixels), a saccade (600 deg/s during the
+# exposure), a face with lashes (headset), and the bundled two-eye face.
+for scene in remote headset; do
+  for condition in mjpeg saccade; do
+    measure "${scene}_$condition" "assets/scenes/hard/${scene}_$condition.json" "$hard" --variation-seed 5
+  done
+done
+measure headset_face assets/scenes/hard/headset_face.json "$hard" --variation-seed 6
+measure remote_face assets/scenes/remote_face.json "$hard" --variation-seed 6
 # Glints on the pupil's edge: pupils as wide as the glints' spread (the
 # remote's two glints lie near the pupil's centre unless the eye turns).
 measure remote_glints_on_edge assets/scenes/remote.json "$hard" --min-pupil-mm 1 --max-pupil-mm 1.6 --variation-seed 4

@@ -786,12 +786,14 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
     }
   }
   scene.eyes.front().set_appearance(look);
-  // The motion during the exposure: the scene's, or the drawn speed along
-  // the drawn direction (0 deg: yaw, toward +x; 90 deg: pitch, up).
+  // The motion during the exposure: the scene's, or the drawn angular
+  // speed along the drawn direction (0 deg: yaw, toward +x; 90 deg: pitch,
+  // up). A yaw rate turns the axis by its rate times cos(pitch).
   EyeMotion motion = base.motion();
   if (const auto speed = value("gaze_speed_deg_s")) {
     const double a = value("gaze_speed_direction_deg").value_or(0) * kDegree;
-    motion = {*speed * std::cos(a), *speed * std::sin(a)};
+    const double cos_pitch = std::sqrt(std::max(0.0, 1 - std::pow(scene.eyes.front().optical_axis().y(), 2)));
+    motion = {*speed * std::cos(a) / std::max(cos_pitch, 0.1), *speed * std::sin(a)};
   }
   scene.eyes.front().set_motion(motion);
   // A moved eye must not swallow a camera or a light: the scene reader's

@@ -98,7 +98,16 @@ Eye Eye::at_time(double t_s) const {
   constexpr double kRadPerDeg = std::numbers::pi / 180;
   const UnitVector3 turned = optical_axis_from_yaw_pitch(yaw + motion_.yaw_deg_s * kRadPerDeg * t_s,
                                                          pitch + motion_.pitch_deg_s * kRadPerDeg * t_s);
-  Eye eye = with_rotation_center(model_, rotation_center(), turned);
+  // The shortest rotation from the axis to the turned one, about the centre
+  // of rotation: the eye keeps its own twist (a varied eye's frame need
+  // not be world_from_eye_rotation's), and nothing flips where that
+  // frame's reference axis would.
+  const Vector3 across = cross(o, turned);
+  const double sine = across.norm();
+  if (!(sine > 0)) return *this;
+  const Rotation turn = Rotation::from_axis_angle(UnitVector3::normalize(across), std::atan2(sine, dot(o, turned)));
+  const Vector3 center = rotation_center().from_origin();
+  Eye eye(model_, Pose(turn, center - turn * center) * world_from_eye_);
   eye.appearance_ = appearance_;
   eye.motion_ = motion_;
   return eye;

@@ -202,6 +202,9 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("visual_axis", [](const Eye& e) { return array(e.visual_axis()); }, "unit vector from the cornea centre toward the fixation (kappa applied)")
       .def_property_readonly("world_from_eye", [](const Eye& e) { return matrix(e.world_from_eye()); },
                              "4 x 4 pose: eye-frame points to world points, mm")
+      .def_property_readonly("motion",
+                             [](const Eye& e) { return py::make_tuple(e.motion().yaw_deg_s, e.motion().pitch_deg_s); },
+                             "(yaw_deg_s, pitch_deg_s): how it turns during the exposure; (0, 0): still")
       .def("__repr__", [](const Eye& e) { return "<purkinje.Eye '" + e.model().name + "'>"; });
 
   py::class_<Mesh>(m, "Mesh", "A triangle mesh beside the eyes, in world coordinates.")

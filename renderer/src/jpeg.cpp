@@ -21,7 +21,7 @@ namespace purkinje::renderer {
 namespace {
 
 // libjpeg's default error handler exits the process; this one jumps back
-// to the caller's setjmp with the message kept.
+// to the setjmp with the message kept.
 struct ErrorManager {
   jpeg_error_mgr base;
   std::jmp_buf jump;
@@ -36,69 +36,83 @@ void on_error(j_common_ptr info) {
 
 void on_message(j_common_ptr, int) {}  // no warnings on stderr
 
-// The encoded bytes of an 8-bit grey image (libjpeg allocates them:
-// the caller frees with std::free). Returns false with `message` set on
-// failure. No C++ object lives in this frame across the setjmp.
-bool encode(const unsigned char* pixels, int width, int height, int quality, unsigned char** bytes,
-            unsigned long* size, char* message) {
-  jpeg_compress_struct info;
+// libjpeg's state and error handler for one image, owned by the caller:
+// the setjmp frames below hold only a pointer to it, which the jump
+// leaves as it was.
+struct Codec {
+  jpeg_compress_struct compress;
+  jpeg_decompress_struct decompress;
   ErrorManager errors;
-  info.err = jpeg_std_error(&errors.base);
-  errors.base.error_exit = on_error;
-  errors.base.emit_message = on_message;
-  if (setjmp(errors.jump)) {
-    std::snprintf(message, JMSG_LENGTH_MAX, "%s", errors.message);
-    jpeg_destroy_compress(&info);
+};
+
+// Encodes an 8-bit grey image into `buffer` (of `*size` bytes, large
+// enough for any JPEG of the image: libjpeg then never allocates one of
+// its own); `*size` becomes the JPEG's. Returns false with `message` set
+// on failure.
+bool encode(Codec* codec, const unsigned char* pixels, int width, int height, int quality, unsigned char* buffer,
+            unsigned long* size, char* message) {
+  jpeg_compress_struct* info = &codec->compress;
+  info->err = jpeg_std_error(&codec->errors.base);
+  codec->errors.base.error_exit = on_error;
+  codec->errors.base.emit_message = on_message;
+  if (setjmp(codec->errors.jump)) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "%s", codec->errors.message);
+    jpeg_destroy_compress(info);
     return false;
   }
-  jpeg_create_compress(&info);
-  jpeg_mem_dest(&info, bytes, size);
-  info.image_width = static_cast<JDIMENSION>(width);
-  info.image_height = static_cast<JDIMENSION>(height);
-  info.input_components = 1;
-  info.in_color_space = JCS_GRAYSCALE;
-  jpeg_set_defaults(&info);
-  jpeg_set_quality(&info, quality, TRUE);
-  jpeg_start_compress(&info, TRUE);
-  while (info.next_scanline < info.image_height) {
-    JSAMPROW row = const_cast<unsigned char*>(pixels) + static_cast<std::size_t>(info.next_scanline) * width;
-    jpeg_write_scanlines(&info, &row, 1);
+  jpeg_create_compress(info);
+  unsigned char* out = buffer;
+  jpeg_mem_dest(info, &out, size);
+  info->image_width = static_cast<JDIMENSION>(width);
+  info->image_height = static_cast<JDIMENSION>(height);
+  info->input_components = 1;
+  info->in_color_space = JCS_GRAYSCALE;
+  jpeg_set_defaults(info);
+  jpeg_set_quality(info, quality, TRUE);
+  jpeg_start_compress(info, TRUE);
+  while (info->next_scanline < info->image_height) {
+    JSAMPROW row = const_cast<unsigned char*>(pixels) + static_cast<std::size_t>(info->next_scanline) * width;
+    jpeg_write_scanlines(info, &row, 1);
   }
-  jpeg_finish_compress(&info);
-  jpeg_destroy_compress(&info);
+  jpeg_finish_compress(info);
+  jpeg_destroy_compress(info);
+  if (out != buffer) {  // cannot happen with the caller's bound; never leak
+    std::free(out);
+    std::snprintf(message, JMSG_LENGTH_MAX, "the JPEG outgrew its buffer");
+    return false;
+  }
   return true;
 }
 
-bool decode(const unsigned char* bytes, unsigned long size, int width, int height, unsigned char* pixels,
+bool decode(Codec* codec, const unsigned char* bytes, unsigned long size, int width, int height, unsigned char* pixels,
             char* message) {
-  jpeg_decompress_struct info;
-  ErrorManager errors;
-  info.err = jpeg_std_error(&errors.base);
-  errors.base.error_exit = on_error;
-  errors.base.emit_message = on_message;
-  if (setjmp(errors.jump)) {
-    std::snprintf(message, JMSG_LENGTH_MAX, "%s", errors.message);
-    jpeg_destroy_decompress(&info);
+  jpeg_decompress_struct* info = &codec->decompress;
+  info->err = jpeg_std_error(&codec->errors.base);
+  codec->errors.base.error_exit = on_error;
+  codec->errors.base.emit_message = on_message;
+  if (setjmp(codec->errors.jump)) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "%s", codec->errors.message);
+    jpeg_destroy_decompress(info);
     return false;
   }
-  jpeg_create_decompress(&info);
-  jpeg_mem_src(&info, bytes, size);
-  jpeg_read_header(&info, TRUE);
-  info.out_color_space = JCS_GRAYSCALE;
-  jpeg_start_decompress(&info);
-  if (info.output_width != static_cast<JDIMENSION>(width) || info.output_height != static_cast<JDIMENSION>(height) ||
-      info.output_components != 1) {
-    std::snprintf(message, JMSG_LENGTH_MAX, "decoded %u x %u x %d, not %d x %d x 1", info.output_width,
-                  info.output_height, info.output_components, width, height);
-    jpeg_destroy_decompress(&info);
+  jpeg_create_decompress(info);
+  jpeg_mem_src(info, bytes, size);
+  jpeg_read_header(info, TRUE);
+  info->out_color_space = JCS_GRAYSCALE;
+  jpeg_start_decompress(info);
+  if (info->output_width != static_cast<JDIMENSION>(width) || info->output_height != static_cast<JDIMENSION>(height) ||
+      info->output_components != 1) {
+    std::snprintf(message, JMSG_LENGTH_MAX, "decoded %u x %u x %d, not %d x %d x 1", info->output_width,
+                  info->output_height, info->output_components, width, height);
+    jpeg_destroy_decompress(info);
     return false;
   }
-  while (info.output_scanline < info.output_height) {
-    JSAMPROW row = pixels + static_cast<std::size_t>(info.output_scanline) * width;
-    jpeg_read_scanlines(&info, &row, 1);
+  while (info->output_scanline < info->output_height) {
+    JSAMPROW row = pixels + static_cast<std::size_t>(info->output_scanline) * width;
+    jpeg_read_scanlines(info, &row, 1);
   }
-  jpeg_finish_decompress(&info);
-  jpeg_destroy_decompress(&info);
+  jpeg_finish_decompress(info);
+  jpeg_destroy_decompress(info);
   return true;
 }
 
@@ -123,12 +137,14 @@ void compress_jpeg(SensorImage& image, int quality) {
     }
     pixels[i] = static_cast<unsigned char>(image.values[i]);
   }
-  unsigned char* bytes = nullptr;
-  unsigned long size = 0;
+  // A baseline JPEG codes each 8 x 8 block in at most 64 x (16 + 11) bits,
+  // 3.4 bytes a pixel; 4 a pixel and the headers' room bound any image.
+  std::vector<unsigned char> bytes(4 * pixels.size() + 65536);
+  unsigned long size = static_cast<unsigned long>(bytes.size());
+  Codec codec{};
   char message[JMSG_LENGTH_MAX] = {};
-  const bool encoded = encode(pixels.data(), image.width, image.height, quality, &bytes, &size, message);
-  const bool decoded = encoded && decode(bytes, size, image.width, image.height, pixels.data(), message);
-  std::free(bytes);
+  const bool decoded = encode(&codec, pixels.data(), image.width, image.height, quality, bytes.data(), &size, message) &&
+                       decode(&codec, bytes.data(), size, image.width, image.height, pixels.data(), message);
   if (!decoded) throw std::runtime_error(std::string("compress_jpeg: libjpeg: ") + message);
   for (std::size_t i = 0; i < pixels.size(); ++i) image.values[i] = pixels[i];
 }

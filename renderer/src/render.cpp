@@ -105,10 +105,36 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
                                 std::to_string(options.iris_cache_resolution) +
                                 ": must be 0 (from the iris's size in the image) or in [2, 513]");
   }
-  // Checked before the rays are traced, not after.
-  if (const Sensor& sensor = scene.cameras[camera].sensor(); sensor.jpeg_quality && sensor.bits != 8) {
-    throw std::invalid_argument("render: camera " + scene.cameras[camera].name() + ": sensor.jpeg_quality with bits = " +
-                                std::to_string(sensor.bits) + ": JPEG holds 8 bits");
+  // The scene file's rules for what a camera adds and how eyes move, for
+  // scenes built in code: checked before the rays are traced, not after.
+  const Sensor& sensor = scene.cameras[camera].sensor();
+  const std::string sensor_name = "render: cameras[" + std::to_string(camera) + "].sensor.";
+  const auto reject = [](const std::string& key, double value, const std::string& rule) {
+    throw std::invalid_argument(key + " = " + check::format_number(value) + ": " + rule);
+  };
+  if (!(sensor.corner_illumination > 0 && sensor.corner_illumination <= 1)) {
+    reject(sensor_name + "corner_illumination", sensor.corner_illumination, "must be > 0 and <= 1");
+  }
+  if (!(sensor.hot_pixel_fraction >= 0 && sensor.hot_pixel_fraction <= 0.01)) {
+    reject(sensor_name + "hot_pixel_fraction", sensor.hot_pixel_fraction, "must be between 0 and 0.01");
+  }
+  if (!(sensor.hot_pixel_e_per_s >= 0 && std::isfinite(sensor.hot_pixel_e_per_s))) {
+    reject(sensor_name + "hot_pixel_e_per_s", sensor.hot_pixel_e_per_s, "must be finite and >= 0");
+  }
+  if (sensor.jpeg_quality && (*sensor.jpeg_quality < 1 || *sensor.jpeg_quality > 100)) {
+    reject(sensor_name + "jpeg_quality", *sensor.jpeg_quality, "must be an integer from 1 to 100");
+  }
+  if (sensor.jpeg_quality && sensor.bits != 8) {
+    reject(sensor_name + "jpeg_quality", *sensor.jpeg_quality,
+           "needs 8-bit images (bits = " + std::to_string(sensor.bits) + "): JPEG holds 8 bits");
+  }
+  for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+    const EyeMotion& m = scene.eyes[e].motion();
+    for (const auto& [key, rate] : {std::pair{"yaw_deg_s", m.yaw_deg_s}, std::pair{"pitch_deg_s", m.pitch_deg_s}}) {
+      if (!(std::abs(rate) <= 1000)) {
+        reject("render: eyes[" + std::to_string(e) + "].motion." + key, rate, "must be between -1000 and 1000");
+      }
+    }
   }
   if (options.region) {
     const PixelRegion& r = *options.region;
@@ -499,9 +525,11 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   if (frames == 1) {
     render_instant(scene, camera_index, options, result);
   } else {
-    // Motion blur: the light of every instant summed; the labels, radiance
-    // and AOVs are the mid-exposure instant's (the scene as given).
+    // Motion blur: the light of every instant summed, and the glints' (the
+    // glint masks: their share of the summed light); the labels, radiance
+    // and other AOVs are the mid-exposure instant's (the scene as given).
     std::vector<double> sum;
+    std::vector<std::vector<double>> glint_sums;  // per "glint" and "glint.<light>" AOV, in order
     RenderResult other;
     Scene moved = scene;
     for (int k = 0; k < frames; ++k) {
@@ -516,10 +544,26 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
         for (std::size_t e = 0; e < scene.eyes.size(); ++e) moved.eyes[e] = scene.eyes[e].at_time(instants[k]);
         render_instant(moved, camera_index, instant_options, other);
       }
-      sum.resize(target.electrons.values.size(), 0.0);
-      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += target.electrons.values[i];
+      const std::vector<float>& light = target.electrons.values;
+      sum.resize(light.size(), 0.0);
+      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += light[i];
+      std::size_t g = 0;
+      for (const NamedPlane& aov : target.aovs) {
+        if (aov.name != "glint" && !aov.name.starts_with("glint.")) continue;
+        if (g == glint_sums.size()) glint_sums.emplace_back(light.size(), 0.0);
+        for (std::size_t i = 0; i < light.size(); ++i) glint_sums[g][i] += double(aov.plane.values[i]) * light[i];
+        ++g;
+      }
     }
     for (std::size_t i = 0; i < sum.size(); ++i) result.electrons.values[i] = static_cast<float>(sum[i] / frames);
+    std::size_t g = 0;
+    for (NamedPlane& aov : result.aovs) {
+      if (aov.name != "glint" && !aov.name.starts_with("glint.")) continue;
+      for (std::size_t i = 0; i < sum.size(); ++i) {
+        aov.plane.values[i] = sum[i] > 0 ? static_cast<float>(std::clamp(glint_sums[g][i] / sum[i], 0.0, 1.0)) : 0.0f;
+      }
+      ++g;
+    }
   }
 
   Sensor sensor = camera.sensor();

@@ -72,6 +72,8 @@ Frame frame_at(const Scene& rig, const Point3& center, int position, const Scree
   f.target = target;
   Scene scene = rig;
   const Eye& nominal = rig.eyes.front();
+  // A fixation: the eye holds still on the target, whatever motion the
+  // rig's eye had.
   Eye eye = Eye::fixating(nominal.model(), center, rig.screen->at(target));
   eye.set_appearance(nominal.appearance());
   scene.eyes = {eye};

@@ -46,6 +46,22 @@ TEST(EyeMotion, AtATimeTheAxisHasMovedByTheRatesAboutTheRotationCentre) {
   EXPECT_EQ(eye.at_time(0.002).optical_axis().vector(), eye.optical_axis().vector());
 }
 
+// An eye whose frame is twisted about its axis (as a varied eye's is)
+// keeps its twist while it turns: its frame moves continuously.
+TEST(EyeMotion, ATwistedEyeKeepsItsTwistWhileItTurns) {
+  Scene scene = bundled("remote");
+  Eye eye = with_eye_variation(scene, {30 * kDeg, 45 * kDeg, 2}).eyes[0];
+  eye.set_motion({500, 200});
+  const Eye soon = eye.at_time(1e-6);
+  // 1e-6 s at 539 deg/s: 9.4e-6 rad of turn; each frame axis moves no more.
+  const double turn = std::hypot(500, 200) * kDeg * 1e-6;
+  for (const UnitVector3& axis : {UnitVector3::unit_x(), UnitVector3::unit_y(), UnitVector3::unit_z()}) {
+    const UnitVector3 before = eye.world_from_eye().rotation() * axis, after = soon.world_from_eye().rotation() * axis;
+    EXPECT_LE(angle_between(before, after), turn * 1.0001);
+  }
+  EXPECT_NEAR(distance(soon.rotation_center(), eye.rotation_center()), 0, 1e-12);
+}
+
 // A varied eye keeps its motion.
 TEST(EyeVariation, KeepsTheEyesMotion) {
   Scene scene = bundled("remote");

@@ -187,6 +187,12 @@ def test_a_sensors_realism_reaches_the_image_and_its_labels(tmp_path):
     # Darker corners; a JPEG's blocks change pixels the hot ones leave alone.
     assert result.electrons[0, 0] == pytest.approx(raw.electrons[0, 0] * 0.5, rel=0.01)
     assert (result.image != raw.image).mean() > 0.3
+    # A saccade: the eye says how it turns, the labels too.
+    d["eyes"][0]["motion"] = {"yaw_deg_s": 600}
+    moving = purkinje.parse_scene(d)
+    assert moving.eyes[0].motion == (600, 0)
+    labels = json.loads(purkinje.render(moving, noise=False).write(tmp_path / "m")["labels"].read_text())
+    assert labels["eyes"][0]["motion"] == {"yaw_deg_s": 600, "pitch_deg_s": 0}
 
 
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():

@@ -134,9 +134,9 @@ class Eye {
   const EyeMotion& motion() const { return motion_; }
   void set_motion(const EyeMotion& motion) { motion_ = motion; }
   // The eye `t_s` seconds after mid-exposure: its optical axis's yaw and
-  // pitch moved by the motion's rates times t_s, turned about the centre
-  // of rotation (no torsion: world_from_eye_rotation's frame); appearance
-  // and motion kept. t_s = 0 or a still eye: this eye.
+  // pitch moved by the motion's rates times t_s, the eye turned by the
+  // shortest rotation from its axis to that one about the centre of
+  // rotation; appearance and motion kept. t_s = 0 or a still eye: this eye.
   Eye at_time(double t_s) const;
   const Pose& world_from_eye() const { return world_from_eye_; }
   const Pose& eye_from_world() const { return eye_from_world_; }

@@ -66,7 +66,7 @@ TEST(EyeMotion, ATwistedEyeKeepsItsTwistWhileItTurns) {
 TEST(EyeVariation, KeepsTheEyesMotion) {
   Scene scene = bundled("remote");
   scene.eyes[0].set_motion({250, 40});
-  const Eye& t = with_eye_variation(scene, {10 * kDeg, 0, 2}).eyes[0];
+  const Eye t = with_eye_variation(scene, {10 * kDeg, 0, 2}).eyes[0];  // a copy: the scene is a temporary
   EXPECT_EQ(t.motion().yaw_deg_s, 250);
   EXPECT_EQ(t.motion().pitch_deg_s, 40);
 }

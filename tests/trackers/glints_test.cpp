@@ -326,6 +326,25 @@ TEST(BlobGlintDetector, GlintsAtTheImagesEdgeAreFoundWithoutReadingOutside) {
   EXPECT_LT(std::hypot(glints[0].centre.u, glints[0].centre.v), 1.0);
 }
 
+// A hot pixel is one bright pixel: no optics put a point's light there
+// alone. Its neighbours hold nothing, so it is dropped; a spot of the
+// narrowest width the rule admits (sigma 0.3 px, centred on a pixel:
+// its four neighbours hold 0.21 of the peak) is kept, bright or faint,
+// with a hot pixel beside it.
+TEST(BlobGlintDetector, AHotPixelIsNoGlintButANarrowSpotIs) {
+  cv::Mat image = synthetic(48, 48, {{30, 24, 250, 0.3}}, 40, 0);
+  image.at<std::uint8_t>(12, 10) = 250;  // a hot pixel, saturated
+  image.at<std::uint8_t>(36, 14) = 140;  // and a dimmer one
+  const std::vector<Glint> glints = BlobGlintDetector().detect(view(image));
+  ASSERT_EQ(glints.size(), 1u);
+  EXPECT_NEAR(glints[0].centre.u, 30, 0.05);
+  EXPECT_NEAR(glints[0].centre.v, 24, 0.05);
+  // Without the rule, the hot pixels are glints too.
+  BlobGlintSettings all;
+  all.min_neighbour_share = 0;
+  EXPECT_EQ(BlobGlintDetector(all).detect(view(image)).size(), 3u);
+}
+
 TEST(BlobGlintDetector, RejectsImagesItCannotReadNamingTheRule) {
   const BlobGlintDetector detector;
   const std::vector<std::uint8_t> pixels(100, 0);
@@ -363,6 +382,11 @@ TEST(BlobGlintDetector, RejectsSettingsOutOfRangeNamingThem) {
   s = {};
   s.background_radius_px = 0;
   EXPECT_THROW(BlobGlintDetector{s}, std::invalid_argument);
+  for (const double share : {-0.1, 1.0, std::nan("")}) {
+    s = {};
+    s.min_neighbour_share = share;
+    EXPECT_THROW(BlobGlintDetector{s}, std::invalid_argument) << share;
+  }
   // The settings' error, or why there is none to check.
   const auto refusal = [](const BlobGlintSettings& settings) {
     try {

@@ -341,6 +341,39 @@ struct Peak {
   int part;        // the peak's
 };
 
+// Whether a blob's peak shares its brightness with its four neighbours as
+// optics would (settings' min_neighbour_share), both above the background
+// (the median of the ring of pixels two away: the top-hat's own
+// background lies below the noise, whose positive part would count);
+// neighbours beyond the image count as the mean of those within.
+bool spread_by_optics(const Frame& f, int label, const Blob& blob, double min_share) {
+  if (min_share <= 0) return true;
+  cv::Point at;
+  cv::minMaxLoc(f.scratch.above(blob.box), nullptr, nullptr, nullptr, &at, f.scratch.labels(blob.box) == label);
+  at += blob.box.tl();
+  const auto inside = [&](cv::Point q) { return q.x >= 0 && q.y >= 0 && q.x < f.cols && q.y < f.rows; };
+  std::array<float, 16> ring{};
+  std::size_t n = 0;
+  for (int dy = -2; dy <= 2; ++dy) {
+    for (int dx = -2; dx <= 2; ++dx) {
+      const cv::Point q = at + cv::Point{dx, dy};
+      if (std::max(std::abs(dx), std::abs(dy)) == 2 && inside(q)) ring[n++] = f.scratch.grey.at<float>(q);
+    }
+  }
+  if (n == 0) return true;
+  std::nth_element(ring.begin(), ring.begin() + n / 2, ring.begin() + n);
+  const double background = ring[n / 2];
+  const double peak = f.scratch.grey.at<float>(at) - background;
+  double neighbours = 0;
+  int counted = 0;
+  for (const cv::Point d : {cv::Point{1, 0}, cv::Point{-1, 0}, cv::Point{0, 1}, cv::Point{0, -1}}) {
+    if (!inside(at + d)) continue;
+    neighbours += f.scratch.grey.at<float>(at + d) - background;
+    ++counted;
+  }
+  return counted == 0 || neighbours * 4 / counted >= min_share * peak;
+}
+
 // A glint stands out from all around it: a small bright part of a larger
 // bright region (the rim of a bright patch, which the opening's square
 // cannot reach into, or a lit lid margin) does not. What stands out is
@@ -596,6 +629,9 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
   if (!(s.relative_threshold >= 0 && s.relative_threshold < 1)) {
     fail("relative_threshold = " + check::format_number(s.relative_threshold) + ": must be in [0, 1)");
   }
+  if (!(s.min_neighbour_share >= 0 && s.min_neighbour_share < 1)) {
+    fail("min_neighbour_share = " + check::format_number(s.min_neighbour_share) + ": must be in [0, 1)");
+  }
   if (s.min_area_px < 1 || s.max_area_px < s.min_area_px) {
     fail("min_area_px = " + std::to_string(s.min_area_px) + ", max_area_px = " + std::to_string(s.max_area_px) +
          ": must satisfy 1 <= min_area_px <= max_area_px");
@@ -646,6 +682,7 @@ std::vector<Glint> BlobGlintDetector::detect(const GreyView& view) const {
   std::vector<SaturatedSpot> spots;
   for (int label = 1; label < static_cast<int>(found.size()); ++label) {
     if (found[label].area < settings_.min_area_px || found[label].area > settings_.max_area_px) continue;
+    if (!spread_by_optics(frame, label, found[label], settings_.min_neighbour_share)) continue;
     const BlobWindow window = blob_window(frame, label, found[label].box, disc);
     const std::optional<Peak> peak = standing_peak(frame, window);
     if (!peak) continue;

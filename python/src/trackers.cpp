@@ -107,7 +107,7 @@ trackers::BlobGlintSettings glint_settings(const py::dict& keys) {
             field("relative_threshold", &S::relative_threshold), field("min_area_px", &S::min_area_px),
             field("max_area_px", &S::max_area_px), field("centroid_margin_px", &S::centroid_margin_px),
             field("spot_sigma_px", &S::spot_sigma_px), field("full_scale_e", &S::full_scale_e),
-            field("read_noise_e", &S::read_noise_e)});
+            field("read_noise_e", &S::read_noise_e), field("min_neighbour_share", &S::min_neighbour_share)});
   return s;
 }
 

@@ -341,7 +341,9 @@ TEST(MotionBlur, AGlintsStreakIsItsPathOverTheExposure) {
     const ImagePlane& mask = aov(result, "glint");
     for (int y = static_cast<int>(mean_v[l] - reach); y <= static_cast<int>(mean_v[l] + reach) + 1; ++y) {
       for (int x = static_cast<int>(mean_u[l] - reach); x <= static_cast<int>(mean_u[l] + reach) + 1; ++x) {
-        if (e.at(x, y) > 1) EXPECT_GT(mask.at(x, y), 0.999) << x << ", " << y;
+        if (e.at(x, y) > 1) {
+          EXPECT_GT(mask.at(x, y), 0.999) << x << ", " << y;
+        }
       }
     }
     worst_px = std::max(worst_px, std::hypot(streak.u - mean_u[l], streak.v - mean_v[l]));

@@ -327,10 +327,9 @@ TEST(BlobGlintDetector, GlintsAtTheImagesEdgeAreFoundWithoutReadingOutside) {
 }
 
 // A hot pixel is one bright pixel: no optics put a point's light there
-// alone. Its neighbours hold nothing, so it is dropped; a spot of the
-// narrowest width the rule admits (sigma 0.3 px, centred on a pixel:
-// its four neighbours hold 0.21 of the peak) is kept, bright or faint,
-// with a hot pixel beside it.
+// alone. Its neighbours hold nothing, so it is dropped; a narrow spot
+// (sigma 0.3 px, centred on a pixel: its four neighbours hold 0.21 of
+// the peak; the rule's bar is 0.1) is kept, with hot pixels beside it.
 TEST(BlobGlintDetector, AHotPixelIsNoGlintButANarrowSpotIs) {
   cv::Mat image = synthetic(48, 48, {{30, 24, 250, 0.3}}, 40, 0);
   image.at<std::uint8_t>(12, 10) = 250;  // a hot pixel, saturated
@@ -343,6 +342,25 @@ TEST(BlobGlintDetector, AHotPixelIsNoGlintButANarrowSpotIs) {
   BlobGlintSettings all;
   all.min_neighbour_share = 0;
   EXPECT_EQ(BlobGlintDetector(all).detect(view(image)).size(), 3u);
+}
+
+// An unsaturated spot on the iris side of the pupil's edge (a 90 DN step
+// between it and its pupil-side neighbour): the edge is no reason to
+// drop it, since each neighbour is levelled by the pixel beyond it. And
+// a hot pixel joined to a glint's blob does not drop the glint.
+TEST(BlobGlintDetector, TheLonePixelRuleKeepsSpotsOnTheEdgeAndBesideHotPixels) {
+  for (const double sigma : {0.5, 0.7}) {
+    const Spot spot{32, 24, 150, sigma};
+    const std::vector<Glint> glints =
+        BlobGlintDetector().detect(view(synthetic(64, 48, {spot}, 15, 0, 0, CV_8U, 1, 31.5, 90)));
+    ASSERT_EQ(glints.size(), 1u) << sigma;
+    EXPECT_NEAR(glints[0].centre.u, 32, 0.3) << sigma;
+  }
+  cv::Mat image = synthetic(48, 48, {{24, 24, 600, 0.5}}, 40, 0);
+  image.at<std::uint8_t>(22, 26) = 255;  // diagonal to the spot's corner, saturated
+  const std::vector<Glint> glints = BlobGlintDetector().detect(view(image));
+  ASSERT_EQ(glints.size(), 1u);
+  EXPECT_NEAR(glints[0].centre.v, 24, 0.5);
 }
 
 TEST(BlobGlintDetector, RejectsImagesItCannotReadNamingTheRule) {
@@ -382,7 +400,7 @@ TEST(BlobGlintDetector, RejectsSettingsOutOfRangeNamingThem) {
   s = {};
   s.background_radius_px = 0;
   EXPECT_THROW(BlobGlintDetector{s}, std::invalid_argument);
-  for (const double share : {-0.1, 1.0, std::nan("")}) {
+  for (const double share : {-0.1, 4.5, std::nan("")}) {
     s = {};
     s.min_neighbour_share = share;
     EXPECT_THROW(BlobGlintDetector{s}, std::invalid_argument) << share;

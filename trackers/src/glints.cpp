@@ -341,37 +341,52 @@ struct Peak {
   int part;        // the peak's
 };
 
-// Whether a blob's peak shares its brightness with its four neighbours as
-// optics would (settings' min_neighbour_share), both above the background
-// (the median of the ring of pixels two away: the top-hat's own
-// background lies below the noise, whose positive part would count);
-// neighbours beyond the image count as the mean of those within.
+// Whether a blob holds a peak that shares its brightness with its four
+// neighbours as optics would (settings' min_neighbour_share): a local
+// maximum whose neighbours hold that share of its height, both above the
+// median of the ring of pixels two away (the top-hat's own background
+// lies below the noise, whose positive part would count). A neighbour
+// below that level counts as none: on the pupil's edge the dark side's
+// neighbour must not cancel the bright side's. Every local maximum of the
+// blob is tried, so that a hot pixel joined to a glint's blob does not
+// drop the glint. Neighbours beyond the image are left out, the others
+// scaled.
 bool spread_by_optics(const Frame& f, int label, const Blob& blob, double min_share) {
   if (min_share <= 0) return true;
-  cv::Point at;
-  cv::minMaxLoc(f.scratch.above(blob.box), nullptr, nullptr, nullptr, &at, f.scratch.labels(blob.box) == label);
-  at += blob.box.tl();
+  const cv::Mat& grey = f.scratch.grey;
   const auto inside = [&](cv::Point q) { return q.x >= 0 && q.y >= 0 && q.x < f.cols && q.y < f.rows; };
-  std::array<float, 16> ring{};
-  std::size_t n = 0;
-  for (int dy = -2; dy <= 2; ++dy) {
-    for (int dx = -2; dx <= 2; ++dx) {
-      const cv::Point q = at + cv::Point{dx, dy};
-      if (std::max(std::abs(dx), std::abs(dy)) == 2 && inside(q)) ring[n++] = f.scratch.grey.at<float>(q);
+  const std::array<cv::Point, 4> steps = {cv::Point{1, 0}, cv::Point{-1, 0}, cv::Point{0, 1}, cv::Point{0, -1}};
+  for (int y = blob.box.y; y < blob.box.y + blob.box.height; ++y) {
+    for (int x = blob.box.x; x < blob.box.x + blob.box.width; ++x) {
+      const cv::Point at{x, y};
+      if (f.scratch.labels.at<int>(at) != label) continue;
+      const float value = grey.at<float>(at);
+      bool maximum = true;
+      for (const cv::Point d : steps) maximum = maximum && (!inside(at + d) || grey.at<float>(at + d) <= value);
+      if (!maximum) continue;
+      std::array<float, 16> ring{};
+      std::size_t n = 0;
+      for (int dy = -2; dy <= 2; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+          const cv::Point q = at + cv::Point{dx, dy};
+          if (std::max(std::abs(dx), std::abs(dy)) == 2 && inside(q)) ring[n++] = grey.at<float>(q);
+        }
+      }
+      if (n == 0) return true;  // an image too small to tell
+      std::nth_element(ring.begin(), ring.begin() + n / 2, ring.begin() + n);
+      const double height = value - ring[n / 2];
+      if (!(height > 0)) continue;
+      double neighbours = 0;
+      int counted = 0;
+      for (const cv::Point d : steps) {
+        if (!inside(at + d)) continue;
+        neighbours += std::max(0.0, static_cast<double>(grey.at<float>(at + d)) - ring[n / 2]);
+        ++counted;
+      }
+      if (counted == 0 || neighbours * 4 / counted >= min_share * height) return true;
     }
   }
-  if (n == 0) return true;
-  std::nth_element(ring.begin(), ring.begin() + n / 2, ring.begin() + n);
-  const double background = ring[n / 2];
-  const double peak = f.scratch.grey.at<float>(at) - background;
-  double neighbours = 0;
-  int counted = 0;
-  for (const cv::Point d : {cv::Point{1, 0}, cv::Point{-1, 0}, cv::Point{0, 1}, cv::Point{0, -1}}) {
-    if (!inside(at + d)) continue;
-    neighbours += f.scratch.grey.at<float>(at + d) - background;
-    ++counted;
-  }
-  return counted == 0 || neighbours * 4 / counted >= min_share * peak;
+  return false;
 }
 
 // A glint stands out from all around it: a small bright part of a larger
@@ -629,8 +644,8 @@ BlobGlintDetector::BlobGlintDetector(const BlobGlintSettings& s) : settings_(s) 
   if (!(s.relative_threshold >= 0 && s.relative_threshold < 1)) {
     fail("relative_threshold = " + check::format_number(s.relative_threshold) + ": must be in [0, 1)");
   }
-  if (!(s.min_neighbour_share >= 0 && s.min_neighbour_share < 1)) {
-    fail("min_neighbour_share = " + check::format_number(s.min_neighbour_share) + ": must be in [0, 1)");
+  if (!(s.min_neighbour_share >= 0 && s.min_neighbour_share <= 4)) {
+    fail("min_neighbour_share = " + check::format_number(s.min_neighbour_share) + ": must be in [0, 4]");
   }
   if (s.min_area_px < 1 || s.max_area_px < s.min_area_px) {
     fail("min_area_px = " + std::to_string(s.min_area_px) + ", max_area_px = " + std::to_string(s.max_area_px) +

@@ -65,10 +65,12 @@ struct BlobGlintSettings {
   int max_area_px = 400;          // larger bright regions are not glints (specular skin, glasses)
   int centroid_margin_px = 1;     // the centroid's disc reaches this far beyond the blob's radius
   // A lone bright pixel (a hot pixel) is no glint: optics spread a point
-  // over its neighbours. A blob whose peak's four neighbours hold together
-  // less than this fraction of the peak's brightness above the background
-  // is dropped. A Gaussian spot centred on a pixel gives them 0.21 of it
-  // at sigma 0.3 px, 0.93 at 0.5 px (the bundled cameras'). 0: keep all.
+  // over its neighbours. A blob none of whose local maxima has four
+  // neighbours holding together this fraction of its height above the
+  // background (each neighbour levelled by the pixel beyond it) is
+  // dropped. A pixel-integrated Gaussian spot centred on a pixel gives
+  // them 0.21 of it at sigma 0.3 px, 0.91 at 0.5 px (the bundled
+  // cameras'); 0.1 is sigma 0.25 px. 0: keep all; at most 4.
   double min_neighbour_share = 0.1;
   // A saturated glint's spot: the Gaussian's standard deviation in px (the
   // camera's point spread, when the tracker knows it), or 0: the median of

@@ -346,8 +346,8 @@ TEST(BlobGlintDetector, AHotPixelIsNoGlintButANarrowSpotIs) {
 
 // An unsaturated spot on the iris side of the pupil's edge (a 90 DN step
 // between it and its pupil-side neighbour): the edge is no reason to
-// drop it, since each neighbour is levelled by the pixel beyond it. And
-// a hot pixel joined to a glint's blob does not drop the glint.
+// drop it, since a neighbour below the background counts as none. And a
+// hot pixel joined to a glint's blob does not drop the glint.
 TEST(BlobGlintDetector, TheLonePixelRuleKeepsSpotsOnTheEdgeAndBesideHotPixels) {
   for (const double sigma : {0.5, 0.7}) {
     const Spot spot{32, 24, 150, sigma};

@@ -67,9 +67,9 @@ struct BlobGlintSettings {
   // A lone bright pixel (a hot pixel) is no glint: optics spread a point
   // over its neighbours. A blob none of whose local maxima has four
   // neighbours holding together this fraction of its height above the
-  // background (each neighbour levelled by the pixel beyond it) is
-  // dropped. A pixel-integrated Gaussian spot centred on a pixel gives
-  // them 0.21 of it at sigma 0.3 px, 0.91 at 0.5 px (the bundled
+  // background (the median of the ring two pixels out; a neighbour below
+  // it counts as none) is dropped. A pixel-integrated Gaussian spot centred on a pixel gives
+  // them 0.21 of it at sigma 0.3 px, 0.92 at 0.5 px (the bundled
   // cameras'); 0.1 is sigma 0.25 px. 0: keep all; at most 4.
   double min_neighbour_share = 0.1;
   // A saturated glint's spot: the Gaussian's standard deviation in px (the

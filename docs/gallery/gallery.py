@@ -1,5 +1,6 @@
-"""The gallery of docs/rendering.md: the bundled scenes and twelve images
-drawn across the face's and the lashes' parameters, each with its labels
+"""The gallery of docs/rendering.md: the bundled scenes, twelve images
+drawn across the face's and the lashes' parameters and three of what a
+real camera adds (JPEG and hot pixels, vignetting, a saccade), each with its labels
 drawn over it (purkinje.figures.draw_labels). Rendered in the fast mode as
 `purkinje render` does by default (1 ray, 16 on edges, sensor noise).
 
@@ -80,7 +81,22 @@ def entries():
         ("remote_blink", "remote, a blink: lids closed, every feature hidden",
          with_face(load(r), lids={"opening": 0.0}, gaze=(0, 0)), 60),
     ]
-    return bundled, drawn
+    # What a real camera adds (the sensor's keys and an eye's motion).
+    streamed = with_face(load(h))
+    streamed["cameras"][0]["sensor"].update({"jpeg_quality": 40, "hot_pixel_fraction": 0.002})
+    vignetted = with_face(load(h))
+    vignetted["cameras"][0]["sensor"]["corner_illumination"] = 0.35
+    saccade = with_face(load(r), gaze=(0, 0))
+    saccade["eyes"][0]["motion"] = {"yaw_deg_s": 900}
+    camera = [
+        ("headset_streamed", "headset with a face, as a cheap streaming camera delivers it: JPEG quality 40, "
+         "0.2% hot pixels", streamed, None),
+        ("headset_vignetted", "headset with a face, a lens with 35% relative illumination at the corners",
+         vignetted, None),
+        ("remote_saccade", "remote with a face, a 900 deg/s saccade during the 4 ms exposure (3.6 deg): "
+         "glints streak, the labels are mid-exposure's", saccade, 60),
+    ]
+    return bundled, drawn + camera
 
 
 def draw(stem, caption, d, half, out):

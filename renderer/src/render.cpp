@@ -526,10 +526,12 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     render_instant(scene, camera_index, options, result);
   } else {
     // Motion blur: the light of every instant summed, and the glints' (the
-    // glint masks: their share of the summed light); the labels, radiance
-    // and other AOVs are the mid-exposure instant's (the scene as given).
+    // glint masks: their share of the summed light; each glint's
+    // electrons); the labels, radiance and other AOVs are the
+    // mid-exposure instant's (the scene as given).
     std::vector<double> sum;
     std::vector<std::vector<double>> glint_sums;  // per "glint" and "glint.<light>" AOV, in order
+    std::vector<double> glint_electrons;           // per glint image, over the exposure
     RenderResult other;
     Scene moved = scene;
     for (int k = 0; k < frames; ++k) {
@@ -546,6 +548,12 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       }
       const std::vector<float>& light = target.electrons.values;
       sum.resize(light.size(), 0.0);
+      glint_electrons.resize(target.glints.size(), 0.0);
+      for (std::size_t i = 0; i < glint_electrons.size(); ++i) {
+        if (target.glints[i].electrons > 0 && std::isfinite(target.glints[i].electrons)) {
+          glint_electrons[i] += target.glints[i].electrons / frames;
+        }
+      }
       for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += light[i];
       std::size_t g = 0;
       for (const NamedPlane& aov : target.aovs) {
@@ -556,6 +564,9 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       }
     }
     for (std::size_t i = 0; i < sum.size(); ++i) result.electrons.values[i] = static_cast<float>(sum[i] / frames);
+    // A glint's electrons are the whole exposure's (its label's place and
+    // status stay the mid-exposure instant's).
+    for (std::size_t i = 0; i < result.glints.size(); ++i) result.glints[i].electrons = glint_electrons[i];
     std::size_t g = 0;
     for (NamedPlane& aov : result.aovs) {
       if (aov.name != "glint" && !aov.name.starts_with("glint.")) continue;

@@ -328,6 +328,15 @@ TEST(MotionBlur, AGlintsStreakIsItsPathOverTheExposure) {
     }
     if (!alone) continue;
     const Spread streak = spread(e, mean_u[l], mean_v[l], reach, du, dv);
+    // The streak holds the glint's electrons over the exposure, as its
+    // label says (a spot's tails beyond 5 sigma and the window aside).
+    double streak_electrons = 0;
+    for (int y = static_cast<int>(mean_v[l] - reach); y <= static_cast<int>(mean_v[l] + reach) + 1; ++y) {
+      for (int x = static_cast<int>(mean_u[l] - reach); x <= static_cast<int>(mean_u[l] + reach) + 1; ++x) {
+        streak_electrons += e.at(x, y);
+      }
+    }
+    EXPECT_NEAR(streak_electrons, result.glints[l].electrons, 1e-3 * result.glints[l].electrons) << "light " << l;
     EXPECT_NEAR(streak.u, mean_u[l], 0.05) << "light " << l;
     EXPECT_NEAR(streak.v, mean_v[l], 0.05) << "light " << l;
     // The still glint's own spread (point spread, pixel, LED), plus the

@@ -38,11 +38,20 @@ void on_message(j_common_ptr, int) {}  // no warnings on stderr
 
 // libjpeg's state and error handler for one image, owned by the caller:
 // the setjmp frames below hold only a pointer to it, which the jump
-// leaves as it was.
+// leaves as it was. Both structs report to `errors` (jpeg_create_*
+// keep the handler set here).
 struct Codec {
-  jpeg_compress_struct compress;
-  jpeg_decompress_struct decompress;
-  ErrorManager errors;
+  jpeg_compress_struct compress{};
+  jpeg_decompress_struct decompress{};
+  ErrorManager errors{};
+
+  Codec() {
+    compress.err = decompress.err = jpeg_std_error(&errors.base);
+    errors.base.error_exit = on_error;
+    errors.base.emit_message = on_message;
+  }
+  Codec(const Codec&) = delete;
+  Codec& operator=(const Codec&) = delete;
 };
 
 // Encodes an 8-bit grey image into `buffer` (of `*size` bytes, large
@@ -52,9 +61,6 @@ struct Codec {
 bool encode(Codec* codec, const unsigned char* pixels, int width, int height, int quality, unsigned char* buffer,
             unsigned long* size, char* message) {
   jpeg_compress_struct* info = &codec->compress;
-  info->err = jpeg_std_error(&codec->errors.base);
-  codec->errors.base.error_exit = on_error;
-  codec->errors.base.emit_message = on_message;
   if (setjmp(codec->errors.jump)) {
     std::snprintf(message, JMSG_LENGTH_MAX, "%s", codec->errors.message);
     jpeg_destroy_compress(info);
@@ -87,9 +93,6 @@ bool encode(Codec* codec, const unsigned char* pixels, int width, int height, in
 bool decode(Codec* codec, const unsigned char* bytes, unsigned long size, int width, int height, unsigned char* pixels,
             char* message) {
   jpeg_decompress_struct* info = &codec->decompress;
-  info->err = jpeg_std_error(&codec->errors.base);
-  codec->errors.base.error_exit = on_error;
-  codec->errors.base.emit_message = on_message;
   if (setjmp(codec->errors.jump)) {
     std::snprintf(message, JMSG_LENGTH_MAX, "%s", codec->errors.message);
     jpeg_destroy_decompress(info);
@@ -141,7 +144,7 @@ void compress_jpeg(SensorImage& image, int quality) {
   // 3.4 bytes a pixel; 4 a pixel and the headers' room bound any image.
   std::vector<unsigned char> bytes(4 * pixels.size() + 65536);
   unsigned long size = static_cast<unsigned long>(bytes.size());
-  Codec codec{};
+  Codec codec;
   char message[JMSG_LENGTH_MAX] = {};
   const bool decoded = encode(&codec, pixels.data(), image.width, image.height, quality, bytes.data(), &size, message) &&
                        decode(&codec, bytes.data(), size, image.width, image.height, pixels.data(), message);

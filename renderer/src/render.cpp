@@ -379,13 +379,12 @@ RenderResult render(const Scene& scene, int camera_index, const RenderOptions& o
 namespace {
 
 // The scene's light at one instant: everything render() gives but the
-// sensor image (options validated).
-void render_instant(const Scene& scene, int camera_index, const RenderOptions& options, RenderResult& result) {
+// sensor image (options validated), its parallel work in `arena`.
+void render_instant(const Scene& scene, int camera_index, const RenderOptions& options, tbb::task_arena& arena,
+                    RenderResult& result) {
   const Camera& camera = scene.cameras[camera_index];
   const Intrinsics& k = camera.intrinsics();
   const int width = k.width, height = k.height;
-
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
 
   PlanePool pool(width, height);
   pool.give(result.radiance);
@@ -522,8 +521,9 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   const Camera& camera = scene.cameras[camera_index];
   const std::vector<double> instants = exposure_instants(scene, camera);
   const int frames = static_cast<int>(instants.size()), middle = frames / 2;
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   if (frames == 1) {
-    render_instant(scene, camera_index, options, result);
+    render_instant(scene, camera_index, options, arena, result);
   } else {
     // Motion blur: the light of every instant summed, and the glints' (the
     // glint masks: their share of the summed light; each glint's
@@ -541,10 +541,10 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       }
       RenderResult& target = k == middle ? result : other;
       if (k == middle) {
-        render_instant(scene, camera_index, instant_options, result);
+        render_instant(scene, camera_index, instant_options, arena, result);
       } else {
         for (std::size_t e = 0; e < scene.eyes.size(); ++e) moved.eyes[e] = scene.eyes[e].at_time(instants[k]);
-        render_instant(moved, camera_index, instant_options, other);
+        render_instant(moved, camera_index, instant_options, arena, other);
       }
       const std::vector<float>& light = target.electrons.values;
       sum.resize(light.size(), 0.0);
@@ -579,7 +579,6 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
 
   Sensor sensor = camera.sensor();
   if (!options.noise) sensor.noise = false;
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   arena.execute([&] { result.sensor = expose(result.electrons, sensor, options.seed); });
   if (sensor.jpeg_quality) compress_jpeg(result.sensor, *sensor.jpeg_quality);
 }

@@ -44,6 +44,11 @@ for scene in remote headset; do
     measure "${scene}_$condition" "assets/scenes/hard/${scene}_$condition.json" "$hard" --variation-seed 5
   done
 done
+# A wet sclera's highlights (session 31): the "gaze to 45 degrees" draws
+# with a tear film.
+for scene in remote headset; do
+  measure "${scene}_wet" "assets/scenes/hard/${scene}_wet.json" "$hard" --max-gaze-deg 45 --variation-seed 2
+done
 measure headset_face assets/scenes/hard/headset_face.json "$hard" --variation-seed 6
 measure remote_face assets/scenes/remote_face.json "$hard" --variation-seed 6
 # Glints on the pupil's edge: pupils as wide as the glints' spread (the

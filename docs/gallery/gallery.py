@@ -1,6 +1,7 @@
 """The gallery of docs/rendering.md: the bundled scenes, twelve images
-drawn across the face's and the lashes' parameters and three of what a
-real camera adds (JPEG and hot pixels, vignetting, a saccade), each with its labels
+drawn across the face's and the lashes' parameters, three of what a
+real camera adds (JPEG and hot pixels, vignetting, a saccade) and two of
+a wet sclera's highlights, each with its labels
 drawn over it (purkinje.figures.draw_labels). Rendered in the fast mode as
 `purkinje render` does by default (1 ray, 16 on edges, sensor noise).
 
@@ -96,7 +97,20 @@ def entries():
         ("remote_saccade", "remote with a face, a 900 deg/s saccade during the 4 ms exposure (3.6 deg): "
          "glints streak, the labels are mid-exposure's", saccade, 60),
     ]
-    return bundled, drawn + camera
+    # A wet sclera: its highlights (distractors, cyan squares) where the eye
+    # turns far enough that the sclera mirrors the LEDs.
+    wet_remote = with_face(load(r), gaze=(-38, 0))
+    wet_remote["eyes"][0]["appearance"]["tear_film"] = {}
+    wet_headset = with_face(load(h), gaze=(30, 8))
+    wet_headset["eyes"][0].setdefault("appearance", {})["tear_film"] = {}
+    wet_headset["cameras"][0]["sensor"]["exposure_s"] = 0.0004  # the face's lit sclera saturates at 1 ms
+    wet = [
+        ("remote_wet", "remote with a face, a wet sclera (tear film, 2 deg of roughness), looking 38 deg aside: "
+         "the sclera mirrors both LEDs beside the glints", wet_remote, 60),
+        ("headset_wet", "headset with a face, a wet sclera, looking 30 deg aside and 8 up, exposed 0.4 ms (at 1 ms "
+         "the lit sclera saturates and hides them): the sclera's highlights, wide at 35 mm", wet_headset, None),
+    ]
+    return bundled, drawn + camera + wet
 
 
 def draw(stem, caption, d, half, out):

@@ -103,6 +103,7 @@ const std::vector<ParameterRule>& scene_rules() {
       {"sclera_albedo", T::real, 0, 1},
       {"skin_albedo", T::real, 0, 1},
       {"fundus_reflectance", T::real, 0, 1},
+      {"sclera_roughness_deg", T::real, 0, 10},
       {"cornea_radius_mm", T::real, 0, 100, true},
       {"cornea_asphericity", T::real, -1, 10},
       {"posterior_cornea", T::boolean},
@@ -460,6 +461,9 @@ struct Reader {
     for (const char* name : {"lid_opening", "blink", "skin_albedo"}) {
       if (given(name) && !lids) where.at(name).fail("", "the scene's first eye has no eyelids (scene-format.md: eyelids)");
     }
+    if (given("sclera_roughness_deg") && !scene.eyes.front().appearance().tear_film) {
+      where.at("sclera_roughness_deg").fail("", "the scene's first eye has no tear film (scene-format.md: tear film)");
+    }
     const bool face = scene.eyes.front().appearance().face.has_value();
     for (const FaceKey& key : kFaceKeys) {
       const std::string name(key.name);
@@ -734,6 +738,9 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (auto v = value("sclera_albedo")) look.sclera_albedo = *v;
   if (auto v = value("skin_albedo")) look.skin_albedo = *v;
   if (auto v = value("fundus_reflectance")) look.fundus_reflectance = *v;
+  if (look.tear_film) {
+    if (auto v = value("sclera_roughness_deg")) look.tear_film->sclera_roughness_deg = *v;
+  }
   if (look.eyelids) {
     if (auto v = value("lid_opening")) look.eyelids->opening = *v;
     if (value("blink").value_or(0) != 0) look.eyelids->opening = 0;

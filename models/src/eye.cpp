@@ -51,18 +51,23 @@ double shell_radius_mm(const EyeModel& m, double depth_mm) {
   // below the limbus plane, else an annulus in that plane).
   const double h = m.rotation_center_depth_mm - depth_mm;
   const double h_limbus = m.rotation_center_depth_mm - m.limbus_depth_mm();
-  const double R = m.sclera_radius_mm, r_limbus = m.limbus_radius_mm;
-  double h_seam = h_limbus;
-  if (R >= r_limbus && std::sqrt(R * R - r_limbus * r_limbus) < h_limbus) {
-    h_seam = std::sqrt(R * R - r_limbus * r_limbus);
-  }
+  const double h_seam = m.rotation_center_depth_mm - m.sclera_seam_depth_mm();
+  const double R = m.sclera_radius_mm;
   if (h <= h_seam) return std::abs(h) < R ? std::sqrt(R * R - h * h) : 0.0;
-  return h <= h_limbus ? r_limbus : 0.0;
+  return h <= h_limbus ? m.limbus_radius_mm : 0.0;
 }
 
 }  // namespace
 
 double EyeModel::limbus_depth_mm() const { return conicoid_depth(anterior_cornea, limbus_radius_mm); }
+
+double EyeModel::sclera_seam_depth_mm() const {
+  // Heights above the centre of rotation.
+  const double h_limbus = rotation_center_depth_mm - limbus_depth_mm();
+  const double R = sclera_radius_mm, r = limbus_radius_mm;
+  if (R >= r && std::sqrt(R * R - r * r) < h_limbus) return rotation_center_depth_mm - std::sqrt(R * R - r * r);
+  return limbus_depth_mm();
+}
 
 double EyeModel::iris_outer_radius_mm() const {
   if (posterior_cornea && iris_depth_mm > limbus_depth_mm()) {
@@ -187,6 +192,32 @@ Point3 Eye::pupil_border_point(double angle) const {
 bool Eye::on_cap(const Point3& world_point) const {
   const Point3 p = eye_from_world_ * world_point;
   return model_.anterior_cornea.radius_mm - p.z < model_.limbus_depth_mm();
+}
+
+bool Eye::cap_crosses(const Point3& from, const Point3& to) const {
+  // Eye frame: the cap is x^2 + y^2 + k w^2 - 2 R w = 0 for depths
+  // 0 <= w = R - z <= limbus depth; along p(t) = a + t d a quadratic in t.
+  const Point3 a = eye_from_world_ * from;
+  const Vector3 d = eye_from_world_ * to - a;
+  const double R = model_.anterior_cornea.radius_mm, k = 1.0 + model_.anterior_cornea.asphericity;
+  const double w0 = R - a.z, dw = -d.z;
+  const double qa = d.x * d.x + d.y * d.y + k * dw * dw;
+  const double qb = 2 * (a.x * d.x + a.y * d.y + k * w0 * dw - R * dw);
+  const double qc = a.x * a.x + a.y * a.y + k * w0 * w0 - 2 * R * w0;
+  // Both ends trimmed as the ray tracer trims its segments.
+  const double trim = 1e-6 + 1e-9 / std::max(d.norm(), 1e-300);
+  const auto crosses_at = [&](double t) {
+    if (!(t > trim && t < 1 - trim)) return false;
+    const double w = w0 + t * dw;
+    return w >= 0 && w <= model_.limbus_depth_mm();
+  };
+  if (std::abs(qa) < 1e-300) return qb != 0 && crosses_at(-qc / qb);
+  const double disc = qb * qb - 4 * qa * qc;
+  if (disc < 0) return false;
+  // The numerically stable pair of roots.
+  const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+  const double t1 = q / qa, t2 = q != 0 ? qc / q : t1;
+  return crosses_at(t1) || crosses_at(t2);
 }
 
 }  // namespace purkinje

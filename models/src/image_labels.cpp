@@ -180,6 +180,20 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
       truth.pixel = r.pixel(glints[g], glint_path);
       view.glints.push_back(truth);
     }
+    // Absent for an eye without a tear film.
+    if (v.contains("distractors")) {
+      const json& distractors = r.array(v, path, "distractors");
+      for (std::size_t d = 0; d < distractors.size(); ++d) {
+        const std::string distractor_path = path + ".distractors[" + std::to_string(d) + "]";
+        DistractorTruth truth;
+        const json& kind = r.member(distractors[d], distractor_path, "kind");
+        if (kind != to_string(DistractorKind::sclera)) r.fail(distractor_path + ".kind", &kind, "must be \"sclera\"");
+        truth.illuminator = r.integer(distractors[d], distractor_path, "illuminator", 0, lights - 1);
+        truth.status = r.status(distractors[d], distractor_path);
+        truth.pixel = r.pixel(distractors[d], distractor_path);
+        view.distractors.push_back(truth);
+      }
+    }
     const std::string pupil_path = path + ".pupil";
     const json& pupil = r.object(v, path, "pupil");
     const json& border = r.array(pupil, pupil_path, "border");

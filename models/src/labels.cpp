@@ -162,6 +162,8 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
     face["lashes"] = lashes;
   }
   look["face"] = face;
+  // Only for a wet sclera (as in scene files).
+  if (a.tear_film) look["tear_film"] = {{"sclera_roughness_deg", number(a.tear_film->sclera_roughness_deg)}};
   out["appearance"] = look;
   return out;
 }
@@ -182,6 +184,23 @@ json glint_json(const GlintTruth& g, const Scene& scene, const Camera& camera) {
   out["reflected"] = has_path ? vector(r.reflected) : null;
   out["incidence_deg"] = has_path ? degrees(r.incidence_rad) : null;
   out["on_cap"] = has_path ? json(r.on_cap) : null;
+  return out;
+}
+
+json distractor_json(const DistractorTruth& d, const Scene& scene, const Camera& camera) {
+  const Reflection& r = d.reflection;
+  json out = json::object();
+  out["kind"] = to_string(d.kind);
+  out["illuminator"] = d.illuminator;
+  out["illuminator_name"] = scene.illuminators.at(d.illuminator).name;
+  out["status"] = to_string(d.status);
+  if (d.status == PathStatus::occluded) out["occluded_by"] = to_string(d.occluder);
+  pixel_fields(out, pixel_valid(d.status, camera, r.point), d.pixel);
+  out["point_mm"] = point(r.point);
+  out["normal"] = vector(r.normal);
+  out["incident"] = vector(r.incident);
+  out["reflected"] = vector(r.reflected);
+  out["incidence_deg"] = degrees(r.incidence_rad);
   return out;
 }
 
@@ -253,6 +272,12 @@ json view_json(const EyeInCameraTruth& v, const Scene& scene) {
   json glints = json::array();
   for (const GlintTruth& g : v.glints) glints.push_back(glint_json(g, scene, camera));
   out["glints"] = glints;
+  // Only for an eye with a tear film, whose sclera mirrors the lights.
+  if (scene.eyes.at(v.eye).appearance().tear_film) {
+    json distractors = json::array();
+    for (const DistractorTruth& d : v.distractors) distractors.push_back(distractor_json(d, scene, camera));
+    out["distractors"] = distractors;
+  }
   out["pupil"] = pupil_json(v.pupil, camera);
   return out;
 }
@@ -408,6 +433,18 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
         r.set("on_cap", path.on_cap ? "1" : "0");
         r.set("incidence_deg", csv_number(path.incidence_rad * kDegreesPerRadian));
       }
+      r.append_to(out);
+    }
+
+    for (const DistractorTruth& d : v.distractors) {
+      CsvRow r = row("distractor");
+      r.set("index", std::to_string(d.illuminator));
+      r.set("name", csv_cell(scene.illuminators.at(d.illuminator).name));
+      r.set("status", to_string(d.status));
+      r.set_pixel(pixel_valid(d.status, camera, d.reflection.point), d.pixel);
+      r.set_point(d.reflection.point);
+      r.set("on_cap", "0");
+      r.set("incidence_deg", csv_number(d.reflection.incidence_rad * kDegreesPerRadian));
       r.append_to(out);
     }
 

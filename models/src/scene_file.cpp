@@ -453,6 +453,14 @@ EyeAppearance read_appearance(Object& e) {
     a.sclera_albedo = o->within_or("sclera_albedo", 0, 1, a.sclera_albedo);
     a.skin_albedo = o->within_or("skin_albedo", 0, 1, a.skin_albedo);
     a.fundus_reflectance = o->within_or("fundus_reflectance", 0, 1, a.fundus_reflectance);
+    if (auto film = o->optional_object("tear_film")) {
+      TearFilm t;
+      // Beyond 10 deg a highlight spreads over a third of the sclera's
+      // radius and its spread's first-order form no longer holds.
+      t.sclera_roughness_deg = film->within_or("sclera_roughness_deg", 0, 10, t.sclera_roughness_deg);
+      film->finish();
+      a.tear_film = t;
+    }
     o->finish();
   }
 
@@ -783,6 +791,7 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
                      {"sclera_albedo", a.sclera_albedo},
                      {"skin_albedo", a.skin_albedo},
                      {"fundus_reflectance", a.fundus_reflectance}};
+  if (a.tear_film) o["appearance"]["tear_film"] = {{"sclera_roughness_deg", a.tear_film->sclera_roughness_deg}};
   // Without lids the head frame places nothing, and the format has none.
   if (a.eyelids) {
     const Eyelids& l = *a.eyelids;

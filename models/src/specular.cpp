@@ -406,6 +406,46 @@ Reflection solve_reflection(const Eye& eye, const Point3& source_w, const Point3
   return out;
 }
 
+Reflection solve_sphere_reflection(const Point3& center, double radius_mm, const Point3& source_w,
+                                   const Point3& target_w) {
+  Reflection out;
+  const Vector3 source = source_w - center, target = target_w - center;
+  if (!source.is_finite() || !target.is_finite() || !(radius_mm > 0) || !(source.norm() > radius_mm) ||
+      !(target.norm() > radius_mm)) {
+    out.status = PathStatus::invalid_input;
+    return out;
+  }
+  Vector3 x;
+  if (!sphere_reflection(radius_mm, source, target, x, out.iterations)) {
+    out.status = PathStatus::no_solution;
+    return out;
+  }
+  const Vector3 n = x / radius_mm;
+  const Vector3 to_source = source - x, to_target = target - x;
+  if (!(dot(to_source, n) > 0) || !(dot(to_target, n) > 0)) {
+    out.status = PathStatus::no_solution;
+    return out;
+  }
+  out.point = center + x;
+  out.normal = UnitVector3::normalize(n);
+  out.incident = UnitVector3::normalize(-to_source);
+  out.reflected = UnitVector3::normalize(to_target);
+  out.incidence_rad = angle_between(-out.incident.vector(), out.normal);
+  out.status = PathStatus::ok;
+  return out;
+}
+
+Reflection solve_scleral_reflection(const Eye& eye, const Point3& source, const Point3& target) {
+  const EyeModel& m = eye.model();
+  Reflection out = solve_sphere_reflection(eye.rotation_center(), m.sclera_radius_mm, source, target);
+  if (out.status != PathStatus::ok) return out;
+  // Eye frame: the seam's plane z = R - seam depth; the sphere is the
+  // sclera only behind it.
+  const Point3 p = eye.eye_from_world() * out.point;
+  if (!(m.anterior_cornea.radius_mm - p.z >= m.sclera_seam_depth_mm())) out.status = PathStatus::no_solution;
+  return out;
+}
+
 Refraction solve_refraction(const Eye& eye, const Point3& inner_w, const Point3& outer_w) {
   Refraction out;
   const EyeModel& m = eye.model();

@@ -36,6 +36,13 @@ const char* to_string(Occluder o) {
   return "unknown";
 }
 
+const char* to_string(DistractorKind kind) {
+  switch (kind) {
+    case DistractorKind::sclera: return "sclera";
+  }
+  return "unknown";
+}
+
 RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
   RefractedImage out;
   out.path = solve_refraction(eye, inner, camera.center());
@@ -74,6 +81,29 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
           if (g.occluder != Occluder::none) g.status = PathStatus::occluded;
         }
         view.glints.push_back(g);
+      }
+      if (eye.appearance().tear_film) {
+        for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
+          DistractorTruth d;
+          d.kind = DistractorKind::sclera;
+          d.illuminator = l;
+          d.reflection = solve_scleral_reflection(eye, scene.illuminators[l].position, camera.center());
+          if (d.reflection.status != PathStatus::ok) continue;
+          d.status = image_of(d.reflection.status, d.reflection.point, camera, d.pixel);
+          if (d.status == PathStatus::ok) {
+            // The cornea stands out of the sclera's sphere: it can hide a
+            // highlight near the limbus. What the camera sees in front of
+            // the highlight comes first, then what shadows it (as for glints).
+            const auto blocker = [&](const Point3& end) {
+              if (eye.cap_crosses(d.reflection.point, end)) return Occluder::eye;
+              return options.occluded ? options.occluded(d.reflection.point, end) : Occluder::none;
+            };
+            d.occluder = blocker(camera.center());
+            if (d.occluder == Occluder::none) d.occluder = blocker(scene.illuminators[l].position);
+            if (d.occluder != Occluder::none) d.status = PathStatus::occluded;
+          }
+          view.distractors.push_back(d);
+        }
       }
       std::vector<Pixel> ok_pixels, visible_pixels;
       for (int k = 0; k < options.pupil_border_points; ++k) {

@@ -38,6 +38,7 @@ from ._purkinje import (
 from ._calibration import CalibrationStudy, GazePanel, calibrate
 from ._compare import CompareStudy, Sweep, compare, displacement_field, sweep, sweep_parameters
 from ._labels import (
+    DistractorLabel,
     Ellipse,
     EyeLabel,
     GlintLabel,
@@ -78,6 +79,7 @@ __all__ = [
     "detect_pupil",
     "Detections",
     "displacement_field",
+    "DistractorLabel",
     "Ellipse",
     "Eye",
     "eye",

@@ -104,6 +104,34 @@ class GlintLabel:
 
 
 @dataclass(frozen=True)
+class DistractorLabel:
+    """A highlight that is no Purkinje image (docs/labels.md, views[k].distractors[j]):
+    kind "sclera", one light mirrored by a wet sclera's tear film."""
+
+    kind: str
+    illuminator: int
+    illuminator_name: str
+    status: str
+    u_px: Optional[float]
+    v_px: Optional[float]
+    point_mm: np.ndarray
+    normal: np.ndarray
+    incidence_deg: float
+    #: For status "occluded": "skin", "lash", "mesh" or "eye" (the cornea included).
+    occluded_by: Optional[str] = None
+
+    @property
+    def pixel_px(self) -> Optional[np.ndarray]:
+        """(u, v), or None where it has no pixel"""
+        return None if self.u_px is None else np.array([self.u_px, self.v_px])
+
+    @classmethod
+    def _from(cls, d: Dict[str, Any]) -> "DistractorLabel":
+        return cls(d["kind"], d["illuminator"], d["illuminator_name"], d["status"], d["u_px"], d["v_px"],
+                   _vector(d["point_mm"]), _vector(d["normal"]), d["incidence_deg"], d.get("occluded_by"))
+
+
+@dataclass(frozen=True)
 class RefractedPoint:
     """A point inside the eye seen through the cornea: a pupil-border point
     (index and angle_deg given) or the refracted pupil centre (both None)."""
@@ -175,6 +203,8 @@ class View:
     rotation_center: Projection
     glints: List[GlintLabel]
     pupil: PupilLabel
+    #: A wet eye's scleral highlights (empty for a dry eye).
+    distractors: List[DistractorLabel] = field(default_factory=list)
 
     @property
     def glints_px(self) -> np.ma.MaskedArray:
@@ -185,7 +215,7 @@ class View:
     def _from(cls, d: Dict[str, Any]) -> "View":
         return cls(d["camera"], d["camera_name"], d["eye"], Projection._from(d["cornea_center"]),
                    Projection._from(d["rotation_center"]), [GlintLabel._from(g) for g in d["glints"]],
-                   PupilLabel._from(d["pupil"]))
+                   PupilLabel._from(d["pupil"]), [DistractorLabel._from(x) for x in d.get("distractors", [])])
 
 
 @dataclass(frozen=True)

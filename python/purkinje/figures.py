@@ -450,6 +450,7 @@ LABEL_COLOURS = {
     "lash": ("#ff33ff", "hidden by a lash"),
     "mesh": ("#3399ff", "hidden by a mesh"),
     "eye": ("#ff3333", "hidden by the eye"),
+    "distractor": ("#00ffff", "scleral highlight"),  # a seen distractor, not a status
 }
 
 
@@ -457,7 +458,9 @@ def draw_labels(ax, view, origin: Tuple[float, float] = (0.0, 0.0), scale: float
     """Draws one view's labels (a `View` of `Labels`) on an axes showing its
     image: each glint as a +, each pupil-border point as a dot, coloured by
     status (seen; hidden by skin, a lash, a mesh or the eye: `occluded_by`),
-    the whole pupil's ellipse dashed and its refracted centre as an x.
+    the whole pupil's ellipse dashed and its refracted centre as an x, and
+    each distractor the camera sees (a wet sclera's highlight) as a cyan
+    square (key "distractor").
     `origin` and `scale` map pixels into the axes' coordinates (a crop's
     corner, a zoom), with pixel centres at integers as the labels have them.
     Returns how many features of each kind it drew (for a caption or a
@@ -480,6 +483,11 @@ def draw_labels(ax, view, origin: Tuple[float, float] = (0.0, 0.0), scale: float
         mark(g, marker="+", markersize=9, mew=1.5)
     for p in view.pupil.border:
         mark(p, marker="o", markersize=2.5)
+    for d in view.distractors:
+        if d.status == "ok":
+            drawn["distractor"] = drawn.get("distractor", 0) + 1
+            ax.plot(*at(d.u_px, d.v_px), marker="s", markersize=9, mew=1.2, markerfacecolor="none",
+                    color=LABEL_COLOURS["distractor"][0], linestyle="none")
     e = view.pupil.ellipse
     if e is not None:
         ax.add_patch(EllipsePatch(at(e.center_u_px, e.center_v_px), 2 * e.semi_axis_1_px * scale,

@@ -174,6 +174,20 @@ void bind_render(py::module_& m) {
                                return out;
                              },
                              "Each glint's light path and signal: eye, illuminator, status, fresnel, power_w, electrons.")
+      .def_property_readonly("distractors",
+                             [](const Rendered& r) {
+                               py::list out;
+                               for (const renderer::GlintImage& g : r.result.distractors) {
+                                 py::dict d = glint_dict(r.scene, g);
+                                 const double* c = g.radiometry.roughness_cov_px2;
+                                 d["spread_cov_px2"] = py::make_tuple(c[0], c[1], c[2]);
+                                 out.append(d);
+                               }
+                               return out;
+                             },
+                             "A wet eye's scleral highlights as the image holds them, in the labels' order: eye, "
+                             "illuminator, status, fresnel, power_w, electrons (what the camera sees of it), "
+                             "spread_cov_px2 (the roughness's spread: u-u, u-v, v-v).")
       ;
 
   m.def("_render", &render, py::arg("scene"), py::arg("camera"), py::arg("mode"), py::arg("samples_per_pixel"),

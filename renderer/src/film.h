@@ -77,6 +77,8 @@ class Film {
   // `lashes`, cornea), the background's coverage (and the lashes' without
   // them) going back to the pool.
   ImagePlane take_radiance() { return std::move(radiance_); }
+  // The fraction of each pixel's samples that saw a class first.
+  const ImagePlane& coverage(PixelClass c) const { return coverage_[static_cast<int>(c)]; }
   ImagePlane& diffuse_electrons() { return diffuse_electrons_; }
   void add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes);
 

@@ -5,6 +5,7 @@
 // eyes get the same treatment as the keratometric eye.
 
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -60,10 +61,10 @@ GlintRadiometry failed(PathStatus status) {
   return out;
 }
 
-}  // namespace
+// A mirror: its reflection from a source toward a target, as the solver finds it.
+using Mirror = std::function<Reflection(const Point3& source, const Point3& target)>;
 
-GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
-                                 const Reflection& reflection) {
+void check_inputs(const Illuminator& light, const Camera& camera) {
   require_non_negative("light '" + light.name + "': radiant_intensity_w_sr",
                        light.radiant_intensity_w_sr);
   require_non_negative("light '" + light.name + "': emitter_diameter_mm",
@@ -71,14 +72,15 @@ GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const
   require_positive("camera '" + camera.name() + "': sensor.f_number", camera.sensor().f_number);
   require_positive("camera '" + camera.name() + "': sensor.pixel_pitch_mm",
                    camera.sensor().pixel_pitch_mm);
+}
 
-  if (reflection.status != PathStatus::ok) return failed(reflection.status);
-  if (!reflection.on_cap) return failed(PathStatus::off_cornea);
-
+// Power and the LED disc's image for a reflection (status ok) off
+// `mirror`, whose inside has index `inner_index`.
+GlintRadiometry mirror_radiometry(const Mirror& mirror, double inner_index, const Illuminator& light,
+                                  const Camera& camera, const Reflection& reflection) {
   GlintRadiometry out;
   out.status = PathStatus::ok;
-  out.fresnel = fresnel_reflectance(std::cos(reflection.incidence_rad), 1.0,
-                                    anterior_inner_index(eye.model()));
+  out.fresnel = fresnel_reflectance(std::cos(reflection.incidence_rad), 1.0, inner_index);
 
   // Solid angle at the LED per unit aperture area: how the incident
   // direction turns as the target slides over the aperture plane. The
@@ -93,7 +95,7 @@ GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const
   const double aperture_step = kRelativeStep * distance(reflection.point, aperture_center);
   const auto incident_toward = [&](const UnitVector3& axis) {
     return [&, axis](double s) -> std::optional<Vector3> {
-      const Reflection r = solve_reflection(eye, light.position, aperture_center + axis * s);
+      const Reflection r = mirror(light.position, aperture_center + axis * s);
       if (!has_geometry(r)) return std::nullopt;
       return r.incident.vector();
     };
@@ -118,7 +120,7 @@ GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const
       const double source_step = kRelativeStep * distance(light.position, reflection.point);
       const auto pixel_moving_along = [&](const UnitVector3& axis) {
         return [&, axis](double s) -> std::optional<Vector3> {
-          const Reflection r = solve_reflection(eye, light.position + axis * s, aperture_center);
+          const Reflection r = mirror(light.position + axis * s, aperture_center);
           if (!has_geometry(r)) return std::nullopt;
           const Projection p = camera.project(r.point);
           if (p.status == ProjectionStatus::behind_camera) return std::nullopt;
@@ -145,6 +147,78 @@ GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const
                       std::isfinite(out.source_cov_px2[0]) &&
                       std::isfinite(out.source_cov_px2[1]) && std::isfinite(out.source_cov_px2[2]);
   if (!finite) return failed(PathStatus::not_converged);
+  return out;
+}
+
+}  // namespace
+
+GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
+                                 const Reflection& reflection) {
+  check_inputs(light, camera);
+  if (reflection.status != PathStatus::ok) return failed(reflection.status);
+  if (!reflection.on_cap) return failed(PathStatus::off_cornea);
+  const Mirror cornea = [&](const Point3& source, const Point3& target) {
+    return solve_reflection(eye, source, target);
+  };
+  return mirror_radiometry(cornea, anterior_inner_index(eye.model()), light, camera, reflection);
+}
+
+GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& film, const Illuminator& light,
+                                             const Camera& camera, const Reflection& reflection) {
+  check_inputs(light, camera);
+  require_non_negative("tear_film.sclera_roughness_deg", film.sclera_roughness_deg);
+  if (reflection.status != PathStatus::ok) return failed(reflection.status);
+  // The sphere goes on smoothly under the cornea: neighbours of a
+  // highlight by the seam keep their paths.
+  const Point3 centre = eye.rotation_center();
+  const double R = eye.model().sclera_radius_mm;
+  const Mirror sphere = [&](const Point3& source, const Point3& target) {
+    return solve_sphere_reflection(centre, R, source, target);
+  };
+  GlintRadiometry out = mirror_radiometry(sphere, kTearFilmIndex, light, camera, reflection);
+  if (out.status != PathStatus::ok || film.sclera_roughness_deg == 0) return out;
+
+  const Point3& x = reflection.point;
+  const UnitVector3 t1 = perpendicular(reflection.normal);
+  const UnitVector3 t2 = UnitVector3::normalize(cross(reflection.normal, t1));
+  const Vector3 to_light = -reflection.incident.vector(), to_camera = reflection.reflected.vector();
+  const double d_s = distance(light.position, x), d_c = distance(camera.center(), x);
+  const double half_norm = (to_light + to_camera).norm();  // 2 cos(incidence)
+  // t_a . (I/R + [P_s/d_s + P_c/d_c] / |s + c|) t_b; dot(t1, t2) = 0.
+  const auto m = [&](const UnitVector3& a, const UnitVector3& b, double a_dot_b) {
+    const double p_s = a_dot_b - dot(a, to_light) * dot(b, to_light);
+    const double p_c = a_dot_b - dot(a, to_camera) * dot(b, to_camera);
+    return a_dot_b / R + (p_s / d_s + p_c / d_c) / half_norm;
+  };
+  const double m11 = m(t1, t1, 1), m12 = m(t1, t2, 0), m22 = m(t2, t2, 1);
+  // M^-1 (symmetric); the spread on the sphere is sigma^2 M^-2.
+  const double det = m11 * m22 - m12 * m12;
+  const double i11 = m22 / det, i12 = -m12 / det, i22 = m11 / det;
+  const double sigma = film.sclera_roughness_deg * kPi / 180;
+  const double s11 = sigma * sigma * (i11 * i11 + i12 * i12);
+  const double s12 = sigma * sigma * (i11 * i12 + i12 * i22);
+  const double s22 = sigma * sigma * (i12 * i12 + i22 * i22);
+  // The camera's projection of tangent moves on the sphere.
+  const double step = kRelativeStep * d_c;
+  const auto pixel_along = [&](const UnitVector3& t) -> std::optional<Vector3> {
+    const Projection plus = camera.project(x + t * step), minus = camera.project(x - t * step);
+    if (plus.status == ProjectionStatus::behind_camera || minus.status == ProjectionStatus::behind_camera) {
+      return std::nullopt;
+    }
+    return Vector3{plus.pixel.u - minus.pixel.u, plus.pixel.v - minus.pixel.v, 0} / (2 * step);
+  };
+  const std::optional<Vector3> j1 = pixel_along(t1), j2 = pixel_along(t2);
+  if (!j1 || !j2 || !(det > 0)) return failed(PathStatus::not_converged);
+  // J S J^T with J = [j1 j2] (columns: pixel per mm along t1, t2).
+  const auto cov = [&](double a_u, double a_v, double b_u, double b_v) {
+    return a_u * (s11 * b_u + s12 * b_v) + a_v * (s12 * b_u + s22 * b_v);
+  };
+  out.roughness_cov_px2[0] = cov(j1->x, j2->x, j1->x, j2->x);
+  out.roughness_cov_px2[1] = cov(j1->x, j2->x, j1->y, j2->y);
+  out.roughness_cov_px2[2] = cov(j1->y, j2->y, j1->y, j2->y);
+  for (const double c : out.roughness_cov_px2) {
+    if (!std::isfinite(c)) return failed(PathStatus::not_converged);
+  }
   return out;
 }
 

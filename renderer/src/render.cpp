@@ -11,9 +11,10 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -133,6 +134,12 @@ void validate(const Scene& scene, int camera, const RenderOptions& options) {
     for (const auto& [key, rate] : {std::pair{"yaw_deg_s", m.yaw_deg_s}, std::pair{"pitch_deg_s", m.pitch_deg_s}}) {
       if (!(std::abs(rate) <= 1000)) {
         reject("render: eyes[" + std::to_string(e) + "].motion." + key, rate, "must be between -1000 and 1000");
+      }
+    }
+    if (const std::optional<TearFilm>& film = scene.eyes[e].appearance().tear_film) {
+      if (!(film->sclera_roughness_deg >= 0 && film->sclera_roughness_deg <= 10)) {
+        reject("render: eyes[" + std::to_string(e) + "].appearance.tear_film.sclera_roughness_deg",
+               film->sclera_roughness_deg, "must be between 0 and 10");
       }
     }
   }
@@ -358,6 +365,66 @@ void image_glints(const Scene& scene, int camera_index, SceneTruth& truth, const
   }
 }
 
+// Distractors: each view's scleral highlights whose light reaches the
+// camera, as light on the sclera before the optics (the LED disc's image
+// and the facets' spread, no point spread): each drawn alone into
+// `scratch` (zeros, left so), kept where the camera sees sclera (its
+// coverage of each pixel) and added to `light`. Described in `images` in
+// the truth's order, with the electrons the image holds. A highlight whose
+// radiometry fails is not drawn, and its label says why.
+void image_distractors(const Scene& scene, int camera_index, SceneTruth& truth, const ImagePlane& sclera,
+                       ImagePlane& scratch, ImagePlane& light, std::vector<GlintImage>& images) {
+  const Camera& camera = scene.cameras[camera_index];
+  for (EyeInCameraTruth& view : truth.views) {
+    if (view.camera != camera_index) continue;
+    const Eye& eye = scene.eyes[view.eye];
+    for (DistractorTruth& d : view.distractors) {
+      GlintImage image;
+      image.eye = view.eye;
+      image.illuminator = d.illuminator;
+      image.status = d.status;
+      const Illuminator& led = scene.illuminators[d.illuminator];
+      if (d.status == PathStatus::ok) {
+        image.radiometry = scleral_highlight_radiometry(eye, *eye.appearance().tear_film, led, camera, d.reflection);
+        if (image.radiometry.status != PathStatus::ok) d.status = image.status = image.radiometry.status;
+        const double whole = image.radiometry.power_w * electrons_per_watt(camera.sensor(), led.wavelength_nm) *
+                             lens_illumination(camera, d.pixel.u, d.pixel.v);
+        if (whole > 0 && std::isfinite(whole)) {
+          const double* a = image.radiometry.source_cov_px2;
+          const double* b = image.radiometry.roughness_cov_px2;
+          const double cov[3] = {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+          add_point_image(scratch, d.pixel.u, d.pixel.v, whole, PointSpread{0, 0}, cov);
+          // add_point_image reaches 5 sigma (or the nearest pixel).
+          const int half_u = static_cast<int>(std::ceil(5 * std::sqrt(cov[0]))) + 2;
+          const int half_v = static_cast<int>(std::ceil(5 * std::sqrt(cov[2]))) + 2;
+          const int x0 = std::max(0, static_cast<int>(std::floor(d.pixel.u)) - half_u);
+          const int x1 = std::min(light.width - 1, static_cast<int>(std::ceil(d.pixel.u)) + half_u);
+          const int y0 = std::max(0, static_cast<int>(std::floor(d.pixel.v)) - half_v);
+          const int y1 = std::min(light.height - 1, static_cast<int>(std::ceil(d.pixel.v)) + half_v);
+          double seen = 0;
+          for (int y = y0; y <= y1; ++y) {
+            for (int x = x0; x <= x1; ++x) {
+              const float e = scratch.at(x, y) * sclera.at(x, y);
+              light.at(x, y) += e;
+              seen += e;
+              scratch.at(x, y) = 0;
+            }
+          }
+          image.electrons = seen;
+        }
+      }
+      images.push_back(image);
+    }
+  }
+}
+
+bool scene_has_tear_film(const Scene& scene) {
+  for (const Eye& eye : scene.eyes) {
+    if (eye.appearance().tear_film) return true;
+  }
+  return false;
+}
+
 // A glint mask: the fraction of a pixel's signal that the glint carries
 // (computed in the glint's own plane, replaced by the fraction).
 ImagePlane fraction_of_signal(ImagePlane& part, const ImagePlane& electrons) {
@@ -392,6 +459,7 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
   for (NamedPlane& aov : result.aovs) pool.give(aov.plane);
   result.aovs.clear();
   result.glints.clear();
+  result.distractors.clear();
   result.camera = camera_index;
   const RayTracer tracer(scene);
   // Labels agree with what the camera can see: a glint or pupil point whose
@@ -459,8 +527,24 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
   ImagePlane scratch = pool.take();
   result.electrons = pool.take();
   arena.execute([&] { blur(film.diffuse_electrons(), psf, result.electrons, scratch); });
-  pool.give(scratch);
   pool.give(film.diffuse_electrons());
+  // Distractors: light on the sclera, through the same optics; their mask
+  // only for a scene that has some (its files keep their planes otherwise).
+  const bool distractors = scene_has_tear_film(scene);
+  ImagePlane distractor_total;
+  if (distractors) {
+    ImagePlane light = pool.take(), spot = pool.take();
+    image_distractors(scene, camera_index, result.truth, film.coverage(PixelClass::sclera), spot, light,
+                      result.distractors);
+    pool.give(spot);
+    distractor_total = pool.take();
+    arena.execute([&] { blur(light, psf, distractor_total, scratch); });
+    pool.give(light);
+    for (std::size_t i = 0; i < distractor_total.values.size(); ++i) {
+      result.electrons.values[i] += distractor_total.values[i];
+    }
+  }
+  pool.give(scratch);
 
   // Per-light planes only when their masks are asked for: a full image per
   // LED is memory and summing that most renders do not need.
@@ -477,6 +561,33 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
   for (std::size_t l = 0; l < glint_planes.size(); ++l) {
     result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l], result.electrons)});
   }
+  if (distractors) result.aovs.push_back({"distractor", fraction_of_signal(distractor_total, result.electrons)});
+}
+
+// A distractor as one instant of a moving eye's exposure has it: its
+// label, its image, and how many instants from mid-exposure.
+struct Highlight {
+  DistractorTruth truth;
+  GlintImage image;
+  int from_middle = 0;
+};
+
+// `result`'s distractors with their labels (its camera's views in order,
+// as image_distractors lists them).
+std::vector<Highlight> highlights_of(const RenderResult& result) {
+  std::vector<Highlight> out;
+  std::size_t next = 0;
+  for (const EyeInCameraTruth& view : result.truth.views) {
+    if (view.camera != result.camera) continue;
+    for (const DistractorTruth& d : view.distractors) out.push_back({d, result.distractors.at(next++), 0});
+  }
+  return out;
+}
+
+// The AOVs that are a highlight's share of the light: summed over a
+// moving eye's instants by that share.
+bool is_highlight_mask(const std::string& name) {
+  return name == "glint" || name.starts_with("glint.") || name == "distractor";
 }
 
 // Motion blur renders this many instants at most: an eye whose image
@@ -525,13 +636,18 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
   if (frames == 1) {
     render_instant(scene, camera_index, options, arena, result);
   } else {
-    // Motion blur: the light of every instant summed, and the glints' (the
-    // glint masks: their share of the summed light; each glint's
-    // electrons); the labels, radiance and other AOVs are the
+    // Motion blur: the light of every instant summed, and the glints' and
+    // distractors' (their masks: their share of the summed light; each
+    // one's electrons); the labels, radiance and other AOVs are the
     // mid-exposure instant's (the scene as given).
     std::vector<double> sum;
     std::vector<std::vector<double>> glint_sums;  // per "glint" and "glint.<light>" AOV, in order
     std::vector<double> glint_electrons;           // per glint image, over the exposure
+    // A distractor's, by eye and light: one may come and go as the eye
+    // turns. One missing at mid-exposure is labelled as at the instant
+    // nearest it where it exists.
+    std::map<std::pair<int, int>, double> distractor_electrons;
+    std::map<std::pair<int, int>, Highlight> nearest_highlight;
     RenderResult other;
     Scene moved = scene;
     for (int k = 0; k < frames; ++k) {
@@ -554,10 +670,17 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
           glint_electrons[i] += target.glints[i].electrons / frames;
         }
       }
+      for (Highlight& h : highlights_of(target)) {
+        const std::pair<int, int> key{h.image.eye, h.image.illuminator};
+        if (h.image.electrons > 0 && std::isfinite(h.image.electrons)) distractor_electrons[key] += h.image.electrons / frames;
+        h.from_middle = std::abs(k - middle);
+        const auto found = nearest_highlight.find(key);
+        if (found == nearest_highlight.end() || h.from_middle < found->second.from_middle) nearest_highlight[key] = h;
+      }
       for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += light[i];
       std::size_t g = 0;
       for (const NamedPlane& aov : target.aovs) {
-        if (aov.name != "glint" && !aov.name.starts_with("glint.")) continue;
+        if (!is_highlight_mask(aov.name)) continue;
         if (g == glint_sums.size()) glint_sums.emplace_back(light.size(), 0.0);
         for (std::size_t i = 0; i < light.size(); ++i) glint_sums[g][i] += double(aov.plane.values[i]) * light[i];
         ++g;
@@ -567,9 +690,27 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     // A glint's electrons are the whole exposure's (its label's place and
     // status stay the mid-exposure instant's).
     for (std::size_t i = 0; i < result.glints.size(); ++i) result.glints[i].electrons = glint_electrons[i];
+    for (auto& [key, h] : nearest_highlight) {
+      if (h.from_middle == 0) continue;  // the mid-exposure instant has it
+      for (EyeInCameraTruth& view : result.truth.views) {
+        if (view.camera == camera_index && view.eye == key.first) view.distractors.push_back(h.truth);
+      }
+    }
+    std::vector<GlintImage> images;
+    for (EyeInCameraTruth& view : result.truth.views) {
+      if (view.camera != camera_index) continue;
+      std::sort(view.distractors.begin(), view.distractors.end(),
+                [](const DistractorTruth& a, const DistractorTruth& b) { return a.illuminator < b.illuminator; });
+      for (const DistractorTruth& d : view.distractors) {
+        GlintImage image = nearest_highlight.at({view.eye, d.illuminator}).image;
+        image.electrons = distractor_electrons[{view.eye, d.illuminator}];
+        images.push_back(image);
+      }
+    }
+    result.distractors = std::move(images);
     std::size_t g = 0;
     for (NamedPlane& aov : result.aovs) {
-      if (aov.name != "glint" && !aov.name.starts_with("glint.")) continue;
+      if (!is_highlight_mask(aov.name)) continue;
       for (std::size_t i = 0; i < sum.size(); ++i) {
         aov.plane.values[i] = sum[i] > 0 ? static_cast<float>(std::clamp(glint_sums[g][i] / sum[i], 0.0, 1.0)) : 0.0f;
       }

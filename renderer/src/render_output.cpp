@@ -117,6 +117,23 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
     glints.push_back(out);
   }
   render["glints"] = glints;
+  // Only when some eye has a tear film: each view's distractors in order.
+  bool wet = false;
+  for (const Eye& eye : scene.eyes) wet = wet || eye.appearance().tear_film.has_value();
+  if (wet) {
+    json distractors = json::array();
+    for (const GlintImage& d : result.distractors) {
+      const double* c = d.radiometry.roughness_cov_px2;
+      distractors.push_back({{"eye", d.eye},
+                             {"illuminator", d.illuminator},
+                             {"status", to_string(d.status)},
+                             {"fresnel_reflectance", number(d.radiometry.fresnel)},
+                             {"power_w", number(d.radiometry.power_w)},
+                             {"electrons", number(d.electrons)},
+                             {"spread_cov_px2", {number(c[0]), number(c[1]), number(c[2])}}});
+    }
+    render["distractors"] = distractors;
+  }
   // Where a glint detector may see a glint that is none (only when the
   // sensor has hot pixels).
   if (camera.sensor().hot_pixel_fraction > 0) {
@@ -148,6 +165,12 @@ std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions
   names.insert(names.end(), {"cornea", "glint"});
   if (options.per_light_glint_masks) {
     for (const Illuminator& light : scene.illuminators) names.push_back("glint." + light.name);
+  }
+  for (const Eye& eye : scene.eyes) {
+    if (eye.appearance().tear_film) {
+      names.push_back("distractor");
+      break;
+    }
   }
   return names;
 }

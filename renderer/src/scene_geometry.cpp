@@ -103,6 +103,8 @@ void add_eyeball(SurfaceList& list, int index, const Eye& eye) {
   const double z_c = R - m.rotation_center_depth_mm;
   // Height of the limbus plane above the centre of rotation: 0 < h < R_s
   // (anatomy_problem).
+  // (The seam of EyeModel::sclera_seam_depth_mm, computed as it always was
+  // here so that every render keeps its bytes.)
   const double h = z_L - z_c;
   double z_seam;  // the sphere is kept behind this plane
   if (R_s >= r_L && std::sqrt(R_s * R_s - r_L * r_L) < h) {

@@ -364,6 +364,17 @@ TEST(DatasetSpec, TheLashParametersReachTheFirstEyesLashes) {
   }
 }
 
+TEST(DatasetSpec, TheScleraRoughnessReachesTheFirstEyesTearFilm) {
+  const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/hard/headset_wet.json",
+      "count": 10, "parameters": {"sclera_roughness_deg": {"uniform": [0, 6]}}})",
+                                              "f.json", kFolder);
+  for (std::uint64_t k : {0u, 7u}) {
+    const ImageDraw d = draw_image(spec, k);
+    const Scene scene = scene_for_image(spec, d);
+    EXPECT_EQ(scene.eyes[0].appearance().tear_film->sclera_roughness_deg, column(spec, d, "sclera_roughness_deg"));
+  }
+}
+
 TEST(DatasetSpec, ADrawNoEyeCanHaveIsNamedWithItsImageAndValues) {
   // A pupil of 6 mm in an iris of 5.9: the anatomy rule, at image 0.
   const DatasetSpec spec = spec_with(R"("parameters": {"pupil_radius_mm": {"uniform": [5.95, 6]}})");
@@ -424,6 +435,8 @@ const Malformed kMalformed[] = {
     {R"("parameters": {"canthal_tilt_deg": {"uniform": [0, 20]}})", "parameters.canthal_tilt_deg.uniform[1] = 20: must be in [-15, 15] (canthal_tilt_deg)"},
     {R"("parameters": {"crease_height_mm": 3})", "parameters.crease_height_mm: the scene's first eye has no face (scene-format.md: face)"},
     {R"("parameters": {"lash_albedo": 0.05})", "parameters.lash_albedo: the scene's first eye has no lashes (scene-format.md: lashes)"},
+    {R"("parameters": {"sclera_roughness_deg": 1})", "parameters.sclera_roughness_deg: the scene's first eye has no tear film (scene-format.md: tear film)"},
+    {R"("parameters": {"sclera_roughness_deg": 12})", "parameters.sclera_roughness_deg = 12: must be in [0, 10] (sclera_roughness_deg)"},
     {R"("parameters": {"midline_mm": 30})", "parameters.midline_mm = 30: unknown key"},
     {R"("parameters": {"iris_albedo": {"grid": {"from": 0.1, "to": 0.2, "steps": 0}}})", "parameters.iris_albedo.grid.steps = 0: must be in [1, 1000000]"},
     {R"("parameters": {"illuminators": {"led_middle": {"on": false}}})", "parameters.illuminators.led_middle = {...}: unknown key (valid keys here: led_left, led_right)"},

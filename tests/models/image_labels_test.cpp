@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -110,6 +111,52 @@ TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
   std::ofstream(not_json) << "{ not json";
   EXPECT_THROW(read_image_labels(not_json), std::runtime_error);
   EXPECT_THROW(read_image_labels("/nonexistent/labels.json"), std::runtime_error);
+}
+
+TEST(ImageLabels, ReadsAWetEyesDistractorsAndNamesABadOne) {
+  // The headset looking 25 deg aside and 10 up, wet: the sclera mirrors LEDs.
+  Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_wet.json");
+  Eye turned = Eye::with_cornea_center(scene.eyes[0].model(), scene.eyes[0].cornea_center(),
+                                       optical_axis_from_yaw_pitch(25 * std::numbers::pi / 180, 10 * std::numbers::pi / 180));
+  turned.set_appearance(scene.eyes[0].appearance());
+  scene.eyes[0] = turned;
+  const SceneTruth truth = compute_truth(scene);
+  const std::vector<DistractorTruth>& written = truth.views[0].distractors;
+  ASSERT_GE(written.size(), 2u);
+  const nlohmann::json good = rendered_labels(scene, truth);
+  const ImageLabels labels = read_image_labels(write(good, "image_labels_wet.json"));
+  const std::vector<DistractorTruth>& read = labels.views[0].distractors;
+  ASSERT_EQ(read.size(), written.size());
+  for (std::size_t k = 0; k < read.size(); ++k) {
+    EXPECT_EQ(read[k].kind, DistractorKind::sclera);
+    EXPECT_EQ(read[k].illuminator, written[k].illuminator);
+    EXPECT_EQ(read[k].status, written[k].status);
+    EXPECT_NEAR(read[k].pixel.u, written[k].pixel.u, 1e-9);
+    EXPECT_NEAR(read[k].pixel.v, written[k].pixel.v, 1e-9);
+  }
+  // A dry eye's labels have none (and need none).
+  const Scene dry = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/headset.json");
+  EXPECT_TRUE(read_image_labels(write(rendered_labels(dry, compute_truth(dry)), "image_labels_dry.json"))
+                  .views[0].distractors.empty());
+
+  const auto expect_error = [](const nlohmann::json& j, const std::string& key, const std::string& rule) {
+    try {
+      read_image_labels(write(j, "image_labels_bad_distractor.json"));
+      ADD_FAILURE() << key << ": read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(rule), std::string::npos) << e.what();
+    }
+  };
+  nlohmann::json j = good;
+  j["views"][0]["distractors"][1]["kind"] = "lens";
+  expect_error(j, "views[0].distractors[1].kind = \"lens\"", "must be \"sclera\"");
+  j = good;
+  j["views"][0]["distractors"][0]["illuminator"] = 8;
+  expect_error(j, "views[0].distractors[0].illuminator = 8", "integer in [0, 7]");
+  j = good;
+  j["views"][0]["distractors"] = 3;
+  expect_error(j, "views[0].distractors", "array");
 }
 
 // Found by fuzzing (tests/fuzz/corpus/labels/deeply_nested.json): the

@@ -661,6 +661,32 @@ TEST(SceneFile, LashErrorsNameTheKeyAndTheRule) {
   }
 }
 
+TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
+  const Scene scene = parse_scene(eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5 } })"), "s.json");
+  ASSERT_TRUE(scene.eyes[0].appearance().tear_film);
+  EXPECT_EQ(scene.eyes[0].appearance().tear_film->sclera_roughness_deg, 3.5);
+  const Scene back = parse_scene(scene_to_json(scene), "back.json");
+  ASSERT_TRUE(back.eyes[0].appearance().tear_film);
+  EXPECT_EQ(back.eyes[0].appearance().tear_film->sclera_roughness_deg, 3.5);
+  // {} is every default; without it, a dry sclera, and none written.
+  EXPECT_EQ(parse_scene(eye_with(R"("appearance": { "tear_film": {} })"), "s.json").eyes[0].appearance().tear_film->sclera_roughness_deg,
+            TearFilm{}.sclera_roughness_deg);
+  const Scene dry = parse_scene(eye_with(R"("appearance": {})"), "s.json");
+  EXPECT_FALSE(dry.eyes[0].appearance().tear_film);
+  EXPECT_EQ(scene_to_json(dry).find("tear_film"), std::string::npos);
+
+  const std::map<std::string, std::string> bad = {
+      {R"({ "sclera_roughness_deg": 11 })", "eyes[0].appearance.tear_film.sclera_roughness_deg = 11: must be between 0 and 10"},
+      {R"({ "sclera_roughness_deg": -1 })", "eyes[0].appearance.tear_film.sclera_roughness_deg = -1: must be between 0 and 10"},
+      {R"({ "meniscus": 1 })", "eyes[0].appearance.tear_film.meniscus = 1: unknown key"},
+      {R"(2)", "eyes[0].appearance.tear_film = 2: must be an object"},
+  };
+  for (const auto& [film, expected] : bad) {
+    const std::string error = parse_error(eye_with(R"("appearance": { "tear_film": )" + film + " }"));
+    EXPECT_EQ(error.find("scene.json: " + expected), 0u) << film << "\n  message: " << error;
+  }
+}
+
 TEST(SceneFile, HeadFrameIsNormalizedWithUpMadePerpendicular) {
   // forward [0, 0, -2] -> (0, 0, -1); up [0, -1, -1] has 1 along forward,
   // which is removed: (0, -1, -1) - 1 x (0, 0, -1) = (0, -1, 0).

@@ -195,6 +195,35 @@ def test_a_sensors_realism_reaches_the_image_and_its_labels(tmp_path):
     assert labels["eyes"][0]["motion"] == {"yaw_deg_s": 600, "pitch_deg_s": 0}
 
 
+def test_a_wet_scleras_highlights_are_labelled_and_imaged():
+    d = purkinje.load_scene(SOURCE_DIR / "assets/scenes/headset.json").to_dict()
+    # Turned 25 deg aside and 10 up: the sclera mirrors several LEDs.
+    d["eyes"][0]["orientation"] = {"yaw_deg": 25, "pitch_deg": 10}
+    d["eyes"][0]["appearance"]["tear_film"] = {"sclera_roughness_deg": 1.5}
+    result = purkinje.render(purkinje.parse_scene(d), noise=False)
+    labels = result.labels.views[0].distractors
+    seen = [x for x in labels if x.status == "ok"]
+    assert len(seen) >= 2 and all(x.kind == "sclera" for x in labels)
+    assert all(x.pixel_px is not None for x in seen)
+    assert [x["illuminator"] for x in result.distractors] == [x.illuminator for x in labels]
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from purkinje.figures import draw_labels
+    fig, ax = plt.subplots()
+    assert draw_labels(ax, result.labels.views[0])["distractor"] == len(seen)
+    plt.close(fig)
+    # The mask's share of the light is what the highlights carry.
+    share = float((result.aov("distractor") * result.electrons).sum())
+    assert share == pytest.approx(sum(x["electrons"] for x in result.distractors), rel=1e-4)
+    assert all(x["spread_cov_px2"][0] > 0 for x in result.distractors if x["status"] == "ok")
+    # A dry sclera has neither.
+    del d["eyes"][0]["appearance"]["tear_film"]
+    dry = purkinje.render(purkinje.parse_scene(d), noise=False)
+    assert dry.labels.views[0].distractors == [] and dry.distractors == []
+    assert "distractor" not in dry.aov_names
+
+
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():
     import subprocess
     import sys

@@ -141,6 +141,12 @@ TEST_F(RecordedOutputs, BundledAndHardScenesRender) {
     ASSERT_NO_FATAL_FAILURE(run("render " + scene(s + ".json") + " -o " + in_root(s)));
     commands += "render " + s + ".json -o " + s + "\n";
   }
+  // A wet sclera's highlights: the eye turned (gaze to 45 deg) so that
+  // the sclera mirrors the LEDs.
+  const std::string wet = "hard/headset_wet.json -o hard/headset_wet --variations 3 --max-gaze-deg 45 --variation-seed 2";
+  ASSERT_NO_FATAL_FAILURE(run("render " + scene("hard/headset_wet.json") + " -o " + in_root("hard/headset_wet") +
+                              " --variations 3 --max-gaze-deg 45 --variation-seed 2"));
+  commands += "render " + wet + "\n";
   expect_recorded(commands);
 }
 

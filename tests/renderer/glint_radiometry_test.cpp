@@ -627,5 +627,181 @@ TEST(GlintRadiometry, RejectsNonPhysicalLightsAndApertures) {
   EXPECT_EQ(g.power_w, 0.0);
 }
 
+// ---------------------------------------------------------------------------
+// Scleral highlights: the tear film on the sclera's sphere (R = 12 mm about
+// the centre of rotation), a mirror like the cornea with the film's index,
+// its facets tilted by the roughness.
+
+// A point of the sclera's sphere `angle` from the optical axis, in the
+// meridian toward eye +x, with its normal and meridional tangent.
+SurfacePoint sclera_point(const Eye& eye, double angle) {
+  const double R = eye.model().sclera_radius_mm;
+  const Vector3 u = eye.world_from_eye() * Vector3{std::sin(angle), 0, std::cos(angle)};
+  const Vector3 t = eye.world_from_eye() * Vector3{std::cos(angle), 0, -std::sin(angle)};
+  return {eye.rotation_center() + u * R, UnitVector3::normalize(u), UnitVector3::normalize(t), R, R};
+}
+
+struct ScleralCase {
+  double angle_rad;  // of the highlight point from the optical axis, about the centre of rotation
+  double incidence_rad;
+  double light_mm, camera_mm;
+  double focal_mm;
+};
+
+struct ScleralMeasured {
+  GlintRadiometry highlight;
+  Reflection reflection;
+  Camera camera;
+  Illuminator led;
+};
+
+ScleralMeasured measure_sclera(const Eye& eye, const ScleralCase& c, const TearFilm& film, double diameter_mm = 0) {
+  const SurfacePoint s = sclera_point(eye, c.angle_rad);
+  const Layout layout = mirror_about(s, c.incidence_rad, c.light_mm, c.camera_mm);
+  ScleralMeasured m{{}, {}, make_camera(layout.camera, s.point, c.focal_mm, 2.8), led_at(layout.light, 0.01, diameter_mm)};
+  m.reflection = solve_scleral_reflection(eye, m.led.position, m.camera.center());
+  EXPECT_EQ(m.reflection.status, PathStatus::ok) << to_string(m.reflection.status);
+  EXPECT_LT(distance(m.reflection.point, s.point), 1e-9);
+  m.highlight = scleral_highlight_radiometry(eye, film, m.led, m.camera, m.reflection);
+  return m;
+}
+
+const ScleralCase kScleralCases[] = {
+    {50 * kDeg, 30 * kDeg, 500, 650, 16},  // remote, oblique
+    {40 * kDeg, 25 * kDeg, 30, 35, 1.5},   // headset
+    {60 * kDeg, 70 * kDeg, 400, 600, 16},  // near grazing
+};
+
+TEST(ScleralHighlight, CarriesTheConvexMirrorsPowerWithTheTearFilmsReflectance) {
+  const Eye eye = eye_at_600(keratometric_eye());
+  for (const ScleralCase& c : kScleralCases) {
+    const ScleralMeasured m = measure_sclera(eye, c, TearFilm{});
+    ASSERT_EQ(m.highlight.status, PathStatus::ok) << to_string(m.highlight.status);
+    const double fresnel = fresnel_reflectance(std::cos(c.incidence_rad), 1.0, kTearFilmIndex);
+    EXPECT_NEAR(m.highlight.fresnel / fresnel, 1, 1e-13);
+    // Camera aimed at the point: the aperture faces the ray.
+    const double expected = mirror_power(0.01 * fresnel, c.light_mm, c.camera_mm,
+                                         virtual_foci(c.light_mm, c.incidence_rad, 12, 12),
+                                         aperture_area_mm2(c.focal_mm, 2.8), 1.0);
+    EXPECT_NEAR(m.highlight.power_w / expected - 1, 0, kMirrorTolerance) << c.incidence_rad;
+  }
+  // About 2% at normal incidence ((0.333 / 2.333)^2), less than the cornea's.
+  EXPECT_NEAR(fresnel_reflectance(1.0, 1.0, kTearFilmIndex), 0.02037, 1e-5);
+}
+
+TEST(ScleralHighlight, ItsRoughnessSpreadsItAsTheTiltedFacetsMoveItToFirstOrder) {
+  // Closed form of the first-order spread with the camera aimed at the
+  // point, the plane of incidence along u: on the tangent plane
+  // M_t = 1/R + cos(theta) (1/d_s + 1/d_c) / 2 and
+  // M_s = 1/R + (1/d_s + 1/d_c) / (2 cos(theta)), a tilt of sigma moves the
+  // point sigma / M, which the camera sees foreshortened by cos(theta)
+  // along the plane of incidence: sigma_u = f_px cos(theta) sigma / (d_c M_t),
+  // sigma_v = f_px sigma / (d_c M_s).
+  const Eye eye = eye_at_600(keratometric_eye());
+  const TearFilm film{2.0};
+  const double sigma = 2.0 * kDeg, R = 12;
+  for (const ScleralCase& c : kScleralCases) {
+    const ScleralMeasured m = measure_sclera(eye, c, film);
+    ASSERT_EQ(m.highlight.status, PathStatus::ok);
+    const double cos_t = std::cos(c.incidence_rad), f_px = c.focal_mm / kPitchMm;
+    const double m_t = 1 / R + cos_t * (1 / c.light_mm + 1 / c.camera_mm) / 2;
+    const double m_s = 1 / R + (1 / c.light_mm + 1 / c.camera_mm) / (2 * cos_t);
+    const double sigma_u = f_px * cos_t * sigma / (c.camera_mm * m_t), sigma_v = f_px * sigma / (c.camera_mm * m_s);
+    // The projection's derivative is taken by differences: 1e-6 relative.
+    EXPECT_NEAR(m.highlight.roughness_cov_px2[0] / (sigma_u * sigma_u) - 1, 0, 1e-5) << c.incidence_rad;
+    EXPECT_NEAR(m.highlight.roughness_cov_px2[2] / (sigma_v * sigma_v) - 1, 0, 1e-5) << c.incidence_rad;
+    EXPECT_NEAR(m.highlight.roughness_cov_px2[1] / (sigma_u * sigma_v), 0, 1e-5) << c.incidence_rad;
+  }
+
+  // Independently: tilt every facet by a small d along each tangent and
+  // find the point where the tilted normal halves light and camera by
+  // Newton on the sphere; the pixels it moves to, per unit tilt, give the
+  // covariance sigma^2 K K^T (the tilt is isotropic, sigma per axis).
+  const ScleralCase oblique{50 * kDeg, 30 * kDeg, 60, 45, 4};
+  const ScleralMeasured m = measure_sclera(eye, oblique, film);
+  ASSERT_EQ(m.highlight.status, PathStatus::ok);
+  const Point3 centre = eye.rotation_center();
+  const UnitVector3 n0 = m.reflection.normal;
+  const UnitVector3 t1 = UnitVector3::normalize(cross(n0, Vector3{0, 1, 0}));
+  const UnitVector3 t2 = UnitVector3::normalize(cross(n0, t1));
+  const auto point_at = [&](double a, double b) {
+    return centre + UnitVector3::normalize(n0.vector() + t1 * a + t2 * b) * R;
+  };
+  const auto residual = [&](const Vector3& tilt, double a, double b, double out[2]) {
+    const Point3 x = point_at(a, b);
+    const Vector3 facet = UnitVector3::normalize(x - centre).vector() + tilt;
+    const Vector3 half = UnitVector3::normalize(m.led.position - x).vector() +
+                         UnitVector3::normalize(m.camera.center() - x).vector();
+    const Vector3 diff = UnitVector3::normalize(facet).vector() - UnitVector3::normalize(half).vector();
+    out[0] = dot(diff, t1);
+    out[1] = dot(diff, t2);
+  };
+  const double tilt = 1e-5;
+  double k[2][2];  // pixel per unit tilt: rows u, v; columns tilt along t1, t2
+  for (int axis = 0; axis < 2; ++axis) {
+    const Vector3 d = (axis == 0 ? t1 : t2) * tilt;
+    double a = 0, b = 0;
+    for (int it = 0; it < 20; ++it) {
+      double r[2], ra[2], rb[2];
+      const double h = 1e-7;
+      residual(d, a, b, r);
+      residual(d, a + h, b, ra);
+      residual(d, a, b + h, rb);
+      const double j00 = (ra[0] - r[0]) / h, j10 = (ra[1] - r[1]) / h, j01 = (rb[0] - r[0]) / h, j11 = (rb[1] - r[1]) / h;
+      const double det = j00 * j11 - j01 * j10;
+      a -= (j11 * r[0] - j01 * r[1]) / det;
+      b -= (-j10 * r[0] + j00 * r[1]) / det;
+    }
+    const Projection moved = m.camera.project(point_at(a, b));
+    const Projection still = m.camera.project(m.reflection.point);
+    k[0][axis] = (moved.pixel.u - still.pixel.u) / tilt;
+    k[1][axis] = (moved.pixel.v - still.pixel.v) / tilt;
+  }
+  const double s2 = sigma * sigma;
+  const double cov_uu = s2 * (k[0][0] * k[0][0] + k[0][1] * k[0][1]);
+  const double cov_uv = s2 * (k[0][0] * k[1][0] + k[0][1] * k[1][1]);
+  const double cov_vv = s2 * (k[1][0] * k[1][0] + k[1][1] * k[1][1]);
+  EXPECT_NEAR(m.highlight.roughness_cov_px2[0] / cov_uu - 1, 0, 1e-3);
+  EXPECT_NEAR(m.highlight.roughness_cov_px2[2] / cov_vv - 1, 0, 1e-3);
+  EXPECT_NEAR(m.highlight.roughness_cov_px2[1], cov_uv, 1e-3 * std::sqrt(cov_uu * cov_vv));
+}
+
+TEST(ScleralHighlight, AMirrorSclerasHighlightIsTheLedsImageAlone) {
+  const Eye eye = eye_at_600(keratometric_eye());
+  const ScleralMeasured m = measure_sclera(eye, kScleralCases[0], TearFilm{0.0}, 1.0);
+  ASSERT_EQ(m.highlight.status, PathStatus::ok);
+  for (const double c : m.highlight.roughness_cov_px2) EXPECT_EQ(c, 0.0);
+  // The disc's image as the cornea's test derives it, with R = 12.
+  const ScleralCase& c = kScleralCases[0];
+  const Foci f = virtual_foci(c.light_mm, c.incidence_rad, 12, 12);
+  const double f_px = c.focal_mm / kPitchMm;
+  const double j_t = f_px * f.tangential / (c.light_mm * (f.tangential + c.camera_mm));
+  EXPECT_NEAR(m.highlight.source_cov_px2[0] / (sq(0.5) / 4 * j_t * j_t) - 1, 0, 1e-5);
+}
+
+TEST(ScleralReflection, IsOnlyWhereTheSphereIsSclera) {
+  // Behind the seam (13.5 - sqrt(12^2 - 5.9^2) = 3.05 mm below the apex for
+  // the keratometric eye) the sphere is sclera; in front of it, cornea.
+  const EyeModel model = keratometric_eye();
+  EXPECT_NEAR(model.sclera_seam_depth_mm(), 13.5 - std::sqrt(144 - 5.9 * 5.9), 1e-12);
+  const Eye eye = eye_at_600(model);
+  // The seam lies sqrt(144 - 5.9^2) = 10.45 mm above the centre of
+  // rotation: 29.4 deg from the axis.
+  const double seam_angle = std::asin(5.9 / 12);
+  for (const double angle : {seam_angle - 0.01, seam_angle + 0.01}) {
+    const SurfacePoint s = sclera_point(eye, angle);
+    const Layout layout = mirror_about(s, 20 * kDeg, 500, 600);
+    const Reflection r = solve_scleral_reflection(eye, layout.light, layout.camera);
+    const Reflection sphere = solve_sphere_reflection(eye.rotation_center(), 12, layout.light, layout.camera);
+    EXPECT_EQ(sphere.status, PathStatus::ok);
+    EXPECT_LT(distance(sphere.point, s.point), 1e-9);
+    EXPECT_LT(reflection_residual_rad(sphere), 1e-12);
+    EXPECT_EQ(r.status, angle > seam_angle ? PathStatus::ok : PathStatus::no_solution) << angle;
+    EXPECT_FALSE(r.on_cap);
+  }
+  // An end inside the sphere has no path.
+  EXPECT_EQ(solve_sphere_reflection({0, 0, 0}, 12, {0, 0, 5}, {0, 0, 100}).status, PathStatus::invalid_input);
+}
+
 }  // namespace
 }  // namespace purkinje::renderer

@@ -140,11 +140,11 @@ TEST(Scorer, WritesRowsAndSummariesWithoutNaN) {
   const std::string csv = score_csv(s);
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
             "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity,nearest_px,"
-            "overlap,axes_error_px,angle_error_deg");
+            "overlap,axes_error_px,angle_error_deg,on_distractor");
   // A found glint's nearest detection is itself; b.png has no glint detection at all.
-  EXPECT_NE(csv.find("\na.png,glint,0,1,found,120,100,121,100,1,wrong,1,,,\n"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("\na.png,glint,,,false_positive,,,200,200,,,,,,\n"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("\nb.png,glint,0,0,missed,50,50,,,,,,,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na.png,glint,0,1,found,120,100,121,100,1,wrong,1,,,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\na.png,glint,,,false_positive,,,200,200,,,,,,,\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nb.png,glint,0,0,missed,50,50,,,,,,,,,\n"), std::string::npos) << csv;
   EXPECT_EQ(csv.find("nan"), std::string::npos);
 
   const nlohmann::json j = nlohmann::json::parse(score_json(s));
@@ -210,6 +210,41 @@ double overlap_by_grid(const Ellipse& a, const Ellipse& b) {
     }
   }
   return static_cast<double>(both) / either;
+}
+
+TEST(Scorer, TellsTheFalseGlintsThatLieOnALabelledDistractor) {
+  // A scleral highlight at (300, 100) the camera sees, another one hidden
+  // at (400, 100): a detection by the first is false and on a distractor,
+  // by the second false only; a glint is still paired first.
+  EyeInCameraTruth view;
+  view.glints = {glint(0, PathStatus::ok, {100, 100})};
+  DistractorTruth seen, hidden;
+  seen.status = PathStatus::ok;
+  seen.pixel = {300, 100};
+  hidden.status = PathStatus::occluded;
+  hidden.pixel = {400, 100};
+  view.distractors = {seen, hidden};
+  Detections found_in;
+  found_in.glints = {found({100.2, 100}), found({303, 100}), found({400, 100}), found({500, 500})};
+  Scorer scorer;
+  scorer.add("wet.png", {view}, found_in);
+  const Score s = scorer.score();
+  EXPECT_EQ(s.glints.found, 1);
+  EXPECT_EQ(s.glints.false_positives, 3);
+  EXPECT_EQ(s.glints.false_positives_on_distractors, 1);
+  int on = 0;
+  for (const FeatureScore& f : s.features) {
+    if (f.on_distractor) {
+      ++on;
+      EXPECT_EQ(f.outcome, Outcome::false_positive);
+      EXPECT_EQ(f.detection->u, 303);
+    }
+  }
+  EXPECT_EQ(on, 1);
+  EXPECT_NE(score_table(s).find("false glints on a labelled distractor (a scleral highlight): 1 of 3"), std::string::npos)
+      << score_table(s);
+  EXPECT_NE(score_csv(s).find("\nwet.png,glint,,,false_positive,,,303,100,,,,,,,1\n"), std::string::npos) << score_csv(s);
+  EXPECT_EQ(nlohmann::json::parse(score_json(s))["glints"]["false_positives_on_distractors"], 1);
 }
 
 // A circle's label: a pupil of radius r about c, every border point seen.

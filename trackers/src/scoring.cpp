@@ -140,7 +140,10 @@ void tally(FeatureSummary& s, const FeatureScore& f) {
       if (f.identity_correct) ++s.identity_told, s.identity_correct += *f.identity_correct;
       break;
     case Outcome::missed: ++s.labelled; break;
-    case Outcome::false_positive: ++s.detected, ++s.false_positives; break;
+    case Outcome::false_positive:
+      ++s.detected, ++s.false_positives;
+      s.false_positives_on_distractors += f.on_distractor;
+      break;
     case Outcome::not_counted: ++s.detected, ++s.not_counted; break;
     case Outcome::wrong_shape: ++s.detected, ++s.wrong_shape; break;
   }
@@ -149,7 +152,8 @@ void tally(FeatureSummary& s, const FeatureScore& f) {
 // Scores one feature of one image: labels (counted or not) against detections.
 void score_feature(Score& score, FeatureSummary& summary, const std::string& image, Feature feature,
                    const std::vector<Label>& labels, const std::vector<Pixel>& detections,
-                   const std::vector<int>& told_illuminator, const std::vector<std::optional<Ellipse>>& outlines) {
+                   const std::vector<int>& told_illuminator, const std::vector<std::optional<Ellipse>>& outlines,
+                   const std::vector<Pixel>& distractors) {
   // A pupil detection's outline against a label's, when both are known.
   std::vector<std::vector<std::optional<double>>> overlaps(labels.size(),
                                                            std::vector<std::optional<double>>(detections.size()));
@@ -205,6 +209,11 @@ void score_feature(Score& score, FeatureSummary& summary, const std::string& ima
           f.eye = l.eye, f.illuminator = l.illuminator, f.label = l.pixel;
           break;
         }
+      }
+      if (f.outcome == Outcome::false_positive) {
+        f.on_distractor = std::any_of(distractors.begin(), distractors.end(), [&](const Pixel& p) {
+          return distance(p, detections[d]) <= score.settings.match_radius_px;
+        });
       }
     }
     tally(summary, f);
@@ -314,7 +323,11 @@ Scorer::Scorer(const ScoringSettings& settings) {
 void Scorer::add(const std::string& image, const std::vector<EyeInCameraTruth>& views, const Detections& found) {
   ++score_.images;
   std::vector<Label> glints, pupils;
+  std::vector<Pixel> distractors;
   for (const EyeInCameraTruth& view : views) {
+    for (const DistractorTruth& d : view.distractors) {
+      if (d.status == PathStatus::ok) distractors.push_back(d.pixel);
+    }
     for (const GlintTruth& g : view.glints) {
       // A glint on the sclera or at a lid's edge may show: a detection
       // there is neither right nor wrong.
@@ -332,9 +345,9 @@ void Scorer::add(const std::string& image, const std::vector<EyeInCameraTruth>& 
   std::vector<std::optional<Ellipse>> outlines;
   for (const Glint& g : found.glints) glint_centres.push_back(g.centre), told.push_back(g.illuminator);
   for (const PupilFound& p : found.pupils) pupil_centres.push_back(p.centre), outlines.push_back(p.ellipse);
-  if (score_.settings.score_glints) score_feature(score_, score_.glints, image, Feature::glint, glints, glint_centres, told, {});
+  if (score_.settings.score_glints) score_feature(score_, score_.glints, image, Feature::glint, glints, glint_centres, told, {}, distractors);
   if (score_.settings.score_pupils) {
-    score_feature(score_, score_.pupils, image, Feature::pupil, pupils, pupil_centres, {}, outlines);
+    score_feature(score_, score_.pupils, image, Feature::pupil, pupils, pupil_centres, {}, outlines, {});
   }
 }
 
@@ -429,6 +442,10 @@ std::string score_table(const Score& score) {
         << " overlap less than " << fixed(score.settings.min_pupil_overlap, 2)
         << " (counted as missed and as false positives: the wrong outline, an iris for a pupil)\n";
   }
+  if (score.glints.false_positives_on_distractors > 0) {
+    out << "false glints on a labelled distractor (a scleral highlight): " << score.glints.false_positives_on_distractors
+        << " of " << score.glints.false_positives << "\n";
+  }
   if (score.glints.not_counted + score.pupils.not_counted > 0) {
     out << "not counted (by a glint on the sclera or under a lid, or a hidden pupil): "
         << score.glints.not_counted << " glint and " << score.pupils.not_counted << " pupil detections\n";
@@ -439,7 +456,7 @@ std::string score_table(const Score& score) {
 std::string score_csv(const Score& score) {
   std::ostringstream out;
   out << "image,feature,eye,illuminator,outcome,label_u_px,label_v_px,u_px,v_px,error_px,identity,nearest_px,"
-         "overlap,axes_error_px,angle_error_deg\n";
+         "overlap,axes_error_px,angle_error_deg,on_distractor\n";
   const auto number = [](double x) {
     std::ostringstream s;
     s << std::setprecision(10) << x;
@@ -454,7 +471,7 @@ std::string score_csv(const Score& score) {
         << optional(f.error_px) << ','
         << (f.identity_correct ? (*f.identity_correct ? "correct" : "wrong") : "") << ','
         << optional(f.nearest_px) << ',' << optional(f.overlap) << ',' << optional(f.axes_error_px) << ','
-        << optional(f.angle_error_deg) << '\n';
+        << optional(f.angle_error_deg) << ',' << (f.on_distractor ? "1" : "") << '\n';
   }
   return out.str();
 }
@@ -472,6 +489,7 @@ std::string score_json(const Score& score) {
     j["false_positives"] = s.false_positives;
     j["false_positive_rate"] = s.false_positive_rate();
     j["not_counted"] = s.not_counted;
+    if (identity) j["false_positives_on_distractors"] = s.false_positives_on_distractors;  // glints only
     j["error_px"] = {{"count", s.error_px.count}, {"mean", s.error_px.mean}, {"median", s.error_px.median},
                      {"p95", s.error_px.p95},     {"max", s.error_px.max}};
     // null: beyond every detection (the share without one reaches it).

@@ -172,6 +172,26 @@ inline constexpr std::array<FaceKey, 7> kFaceKeys{{
     {"midline_mm", &Face::midline_mm, 20, 45, true},
 }};
 
+// The tear film over the sclera (docs/scene-format.md: tear film): wet,
+// the sclera mirrors each light as a highlight that is no Purkinje image,
+// which glint detectors may take for a glint. The film follows the
+// sclera's sphere, its facets tilted about the sphere's normal by a
+// Gaussian of sclera_roughness_deg along each tangent direction
+// (conjunctival folds, vessels and an uneven film): a highlight keeps the
+// mirror's power, spread over the sphere where the tilts reach. The
+// sclera's albedo stays its diffuse reflectance. The roughness is a guess
+// (no measurement of the bulbar conjunctiva's slopes was found): scleral
+// highlights in eye-tracker images are larger and softer than glints.
+struct TearFilm {
+  double sclera_roughness_deg = 2.0;
+};
+// The tear film's refractive index in the near infrared, for its Fresnel
+// reflectance: tears measure 1.3370 at 589 nm (Craig, Simmons, Patel and
+// Tomlinson 1995, Optom Vis Sci 72:718-724); water falls from 1.333 to
+// 1.329 between 589 and 850 nm (Hale and Querry 1973), and so, taken
+// alike, do tears.
+inline constexpr double kTearFilmIndex = 1.333;
+
 struct EyeAppearance {
   double iris_albedo = 0.25;           // mean of the textured iris
   double iris_texture_contrast = 0.5;  // 0: flat iris; 1: albedo varies by about +-100% of the mean
@@ -190,6 +210,8 @@ struct EyeAppearance {
   // Absent: the lids lie on a sphere in a flat wall (Eyelids); present
   // (with eyelids only): the periocular face above.
   std::optional<Face> face;
+  // Absent: a dry sclera, Lambertian only; present: it mirrors the lights too.
+  std::optional<TearFilm> tear_film;
 };
 
 }  // namespace purkinje

@@ -56,6 +56,10 @@ struct EyeModel {
 
   // Depth (along the optical axis, from the anterior apex) of the limbus plane.
   double limbus_depth_mm() const;
+  // Depth of the seam behind which the eyeball is the sclera's sphere: the
+  // limbus plane, or deeper where the sphere is narrower than the limbus
+  // there (a limbal band of the limbus's radius joins them).
+  double sclera_seam_depth_mm() const;
   // How far from the axis the iris reaches in the traced eye. In a
   // two-surface eye whose iris lies behind the limbus plane, the posterior
   // cornea runs down to the iris plane (the chamber angle, at the iris
@@ -152,6 +156,9 @@ class Eye {
   Point3 pupil_border_point(double angle_rad) const;
   // Whether a point of the anterior cornea lies on the cap (inside the limbus).
   bool on_cap(const Point3& world_point) const;
+  // Whether the open segment between two points crosses the anterior
+  // corneal cap (what stands out of the sclera's sphere in front).
+  bool cap_crosses(const Point3& from, const Point3& to) const;
 
  private:
   EyeModel model_;

@@ -37,7 +37,8 @@ struct ImageLabels {
   int width_px = 0, height_px = 0;
   int bits = 8;  // the sensor's significant bits (a PNG of more than 8 keeps them in its words' high bits)
   // The views of this image's camera. Only the image-plane fields are
-  // read: each glint's illuminator, status and pixel; the pupil's ellipse,
+  // read: each glint's and distractor's illuminator, status and pixel (and
+  // a distractor's kind); the pupil's ellipse,
   // each border point's status and the refracted centre's status and
   // pixel; the 3D paths are left empty.
   std::vector<EyeInCameraTruth> views;

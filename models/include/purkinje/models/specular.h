@@ -57,6 +57,18 @@ struct Refraction {
 // `source` and `target` must lie outside the cornea.
 Reflection solve_reflection(const Eye& eye, const Point3& source, const Point3& target);
 
+// Law of reflection on a mirror sphere; `source` and `target` outside it.
+// Status ok, no_solution (no point both ends see) or invalid_input (an
+// end not outside the sphere, or not finite); on_cap is false.
+Reflection solve_sphere_reflection(const Point3& center, double radius_mm, const Point3& source,
+                                   const Point3& target);
+
+// Law of reflection on the eye's sclera: its sphere about the centre of
+// rotation, behind the seam with the cornea (EyeModel::sclera_seam_depth_mm).
+// no_solution where the sphere's mirror point lies in front of the seam
+// (under the cornea), or as solve_sphere_reflection.
+Reflection solve_scleral_reflection(const Eye& eye, const Point3& source, const Point3& target);
+
 // Snell's law at the anterior cornea, and also at the posterior cornea when
 // the eye model has one. `inner` must lie inside the aqueous humour.
 Refraction solve_refraction(const Eye& eye, const Point3& inner, const Point3& outer);

@@ -34,6 +34,30 @@ struct GlintTruth {
   Reflection reflection;     // 3D point, normal, directions, incidence, on_cap
 };
 
+// A highlight that is no Purkinje image: a light mirrored by something
+// other than the cornea, which a glint detector may take for a glint.
+// Labels list them so that such false positives can be scored.
+enum class DistractorKind {
+  sclera,  // the tear film over the sclera (EyeAppearance::tear_film)
+};
+const char* to_string(DistractorKind kind);
+
+struct DistractorTruth {
+  DistractorKind kind = DistractorKind::sclera;
+  int illuminator = 0;
+  // ok, occluded, outside_image or behind_camera: only highlights whose
+  // mirror point exists are listed. A render may set not_converged (its
+  // radiometry failed: not drawn) or list a moving eye's highlight that
+  // exists during part of the exposure only (docs/labels.md).
+  PathStatus status = PathStatus::no_solution;
+  // For status occluded: Occluder::eye when the cornea (or the eye's
+  // shell) stands in the way, else as GlintTruth's; what the camera sees
+  // in front of it first, then what shadows it.
+  Occluder occluder = Occluder::none;
+  Pixel pixel;            // where the mirror point projects (not behind the camera)
+  Reflection reflection;  // on the mirror: point, its normal, directions
+};
+
 struct PupilBorderPointTruth {
   double angle_rad = 0;      // around the pupil, from eye +x toward eye +y
   Point3 border_point;       // the 3D point on the pupil's edge
@@ -68,6 +92,9 @@ struct EyeInCameraTruth {
   int camera = 0;
   int eye = 0;
   std::vector<GlintTruth> glints;  // one per illuminator, in scene order
+  // For an eye with a tear film: its scleral highlights, in illuminator
+  // order; empty otherwise.
+  std::vector<DistractorTruth> distractors;
   PupilTruth pupil;
   Projection cornea_center;
   Projection rotation_center;

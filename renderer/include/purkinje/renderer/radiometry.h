@@ -31,6 +31,9 @@ struct GlintRadiometry {
   // Covariance (u-u, u-v, v-v) in px^2 of the LED's own image: its emitting
   // disc, seen in the convex mirror and imaged by the camera (0 for a point LED).
   double source_cov_px2[3] = {0, 0, 0};
+  // The same of a rough mirror's spread (a scleral highlight's facets
+  // tilted about the sphere's normal; 0 for the cornea).
+  double roughness_cov_px2[3] = {0, 0, 0};
 };
 // From the solver's reflection toward the camera centre. The spreading of
 // the reflected beam is measured from the solver itself: reflections
@@ -38,6 +41,17 @@ struct GlintRadiometry {
 // LED, of the rays that enter it, so it holds for any cornea shape.
 GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
                                  const Reflection& reflection);
+// A scleral highlight (DistractorTruth, kind sclera) the same way, off the
+// tear film (kTearFilmIndex) on the sclera's sphere, with its roughness's
+// spread: to first order in the facets' tilt d (a tangent vector), the
+// highlight moves on the sphere by -M^-1 d, with M = I/R + [P_s/d_s +
+// P_c/d_c] / |s + c| on the tangent plane (s, c: unit vectors to the
+// light and the camera at distances d_s, d_c; P = I minus the projection
+// on them), so that an isotropic tilt of sigma per axis spreads it by
+// sigma^2 M^-2 there; the camera's projection carries that to pixels. The
+// power is the mirror's (a narrow lobe only moves where the light leaves).
+GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& film, const Illuminator& light,
+                                             const Camera& camera, const Reflection& reflection);
 
 // Irradiance (W/m^2) on the iris plane of one eye from one point light,
 // through the cornea: I * T * dOmega/dA, with T the Fresnel transmittance

@@ -87,7 +87,9 @@ struct RenderOptions {
   std::int64_t reference_photons_per_light = std::int64_t{1} << 18;
   bool per_light_glint_masks = false;
   // Trace only these pixels (the rest stay 0 in radiance and AOVs); glints
-  // and the sensor still cover the whole image. Absent: every pixel.
+  // and the sensor still cover the whole image. A wet sclera's highlights
+  // are light on the sclera the traced pixels see: only the region's part
+  // is drawn, and their labels' electrons count it. Absent: every pixel.
   std::optional<PixelRegion> region;
   int threads = 0;                // 0: all hardware threads; results do not depend on it
   // Called from worker threads with the fraction of rows done; must be thread-safe.
@@ -122,9 +124,12 @@ struct RenderResult {
   // (point-spread function), glints added as point images.
   ImagePlane electrons;
   SensorImage sensor;           // noise, saturation, quantization
-  std::vector<NamedPlane> aovs; // depth, N.x/N.y/N.z, id, class coverages, glint masks
+  std::vector<NamedPlane> aovs; // depth, N.x/N.y/N.z, id, class coverages, glint masks, distractor mask
   SceneTruth truth;             // compute_truth with the ray tracer's occlusion (every camera's views)
   std::vector<GlintImage> glints;
+  // The scleral highlights of eyes with a tear film, as glints (with their
+  // roughness's spread): each view's DistractorTruth in order.
+  std::vector<GlintImage> distractors;
 };
 
 RenderResult render(const Scene& scene, int camera, const RenderOptions& options = {});

@@ -10,7 +10,9 @@
 // over is a false positive, unless it lies within the radius of a glint
 // the labels say is there but not counted (on the sclera, or under a
 // lid's edge) or of a wholly hidden pupil: then it is left out of the
-// score. A label left over is a miss.
+// score. A label left over is a miss. A false glint by a distractor the
+// labels list (a scleral highlight the camera sees) stays false, and is
+// told apart.
 
 #include <optional>
 #include <string>
@@ -82,6 +84,9 @@ struct FeatureScore {
   // two semi-axes, and the angle's error (0 to 90 deg; absent for a label
   // within 5% of a circle, whose angle means nothing).
   std::optional<double> overlap, axes_error_px, angle_error_deg;
+  // A false glint within the radius of a distractor the labels list as
+  // seen (a scleral highlight): what fooled the detector.
+  bool on_distractor = false;
 };
 
 struct ErrorStatistics {
@@ -103,6 +108,7 @@ struct FeatureSummary {
   int detected = 0;  // detections made, counted or not
   int found = 0, within_1px = 0, within_2px = 0, within_5px = 0;
   int false_positives = 0, not_counted = 0;
+  int false_positives_on_distractors = 0;  // glints: of the false positives, those on a labelled distractor
   int wrong_shape = 0;                  // pupils: paired by centre, outline not the label's
   ErrorStatistics error_px;             // over the found
   NearestStatistics nearest_px;         // over all labels

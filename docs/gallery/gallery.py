@@ -1,7 +1,8 @@
 """The gallery of docs/rendering.md: the bundled scenes, twelve images
 drawn across the face's and the lashes' parameters, three of what a
-real camera adds (JPEG and hot pixels, vignetting, a saccade) and two of
-a wet sclera's highlights, each with its labels
+real camera adds (JPEG and hot pixels, vignetting, a saccade), one of
+the skin's and sclera's textures and two of a wet sclera's highlights,
+each with its labels
 drawn over it (purkinje.figures.draw_labels). Rendered in the fast mode as
 `purkinje render` does by default (1 ray, 16 on edges, sensor noise).
 
@@ -104,7 +105,11 @@ def entries():
     wet_headset = with_face(load(h), gaze=(30, 8))
     wet_headset["eyes"][0].setdefault("appearance", {})["tear_film"] = {}
     wet_headset["cameras"][0]["sensor"]["exposure_s"] = 0.0004  # the face's lit sclera saturates at 1 ms
+    textured = with_face(load(h), gaze=(20, 5))
+    textured["eyes"][0].setdefault("appearance", {}).update({"skin_texture_contrast": 0.3, "sclera_vessel_contrast": 0.5})
     wet = [
+        ("headset_textured", "headset with a face, the skin's albedo textured (wrinkles, pores, blotches; contrast "
+         "0.3) and the sclera's vessels (0.5), looking 20 deg aside", textured, None),
         ("remote_wet", "remote with a face, a wet sclera (tear film, 2 deg of roughness), looking 38 deg aside: "
          "the sclera mirrors both LEDs beside the glints", wet_remote, 60),
         ("headset_wet", "headset with a face, a wet sclera, looking 30 deg aside and 8 up, exposed 0.4 ms (at 1 ms "

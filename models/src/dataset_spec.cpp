@@ -104,6 +104,8 @@ const std::vector<ParameterRule>& scene_rules() {
       {"skin_albedo", T::real, 0, 1},
       {"fundus_reflectance", T::real, 0, 1},
       {"sclera_roughness_deg", T::real, 0, 10},
+      {"skin_texture_contrast", T::real, 0, 1},
+      {"sclera_vessel_contrast", T::real, 0, 1},
       {"cornea_radius_mm", T::real, 0, 100, true},
       {"cornea_asphericity", T::real, -1, 10},
       {"posterior_cornea", T::boolean},
@@ -738,6 +740,8 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (auto v = value("sclera_albedo")) look.sclera_albedo = *v;
   if (auto v = value("skin_albedo")) look.skin_albedo = *v;
   if (auto v = value("fundus_reflectance")) look.fundus_reflectance = *v;
+  if (auto v = value("skin_texture_contrast")) look.skin_texture_contrast = *v;
+  if (auto v = value("sclera_vessel_contrast")) look.sclera_vessel_contrast = *v;
   if (look.tear_film) {
     if (auto v = value("sclera_roughness_deg")) look.tear_film->sclera_roughness_deg = *v;
   }

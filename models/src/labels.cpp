@@ -162,7 +162,9 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
     face["lashes"] = lashes;
   }
   look["face"] = face;
-  // Only for a wet sclera (as in scene files).
+  // The textures and the tear film only when on (as in scene files).
+  if (a.skin_texture_contrast != 0) look["skin_texture_contrast"] = number(a.skin_texture_contrast);
+  if (a.sclera_vessel_contrast != 0) look["sclera_vessel_contrast"] = number(a.sclera_vessel_contrast);
   if (a.tear_film) look["tear_film"] = {{"sclera_roughness_deg", number(a.tear_film->sclera_roughness_deg)}};
   out["appearance"] = look;
   return out;

@@ -453,6 +453,8 @@ EyeAppearance read_appearance(Object& e) {
     a.sclera_albedo = o->within_or("sclera_albedo", 0, 1, a.sclera_albedo);
     a.skin_albedo = o->within_or("skin_albedo", 0, 1, a.skin_albedo);
     a.fundus_reflectance = o->within_or("fundus_reflectance", 0, 1, a.fundus_reflectance);
+    a.skin_texture_contrast = o->within_or("skin_texture_contrast", 0, 1, a.skin_texture_contrast);
+    a.sclera_vessel_contrast = o->within_or("sclera_vessel_contrast", 0, 1, a.sclera_vessel_contrast);
     if (auto film = o->optional_object("tear_film")) {
       TearFilm t;
       // Beyond 10 deg a highlight spreads over a third of the sclera's
@@ -791,6 +793,9 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
                      {"sclera_albedo", a.sclera_albedo},
                      {"skin_albedo", a.skin_albedo},
                      {"fundus_reflectance", a.fundus_reflectance}};
+  // The textures only when on (every older scene's dump keeps its bytes).
+  if (a.skin_texture_contrast != 0) o["appearance"]["skin_texture_contrast"] = a.skin_texture_contrast;
+  if (a.sclera_vessel_contrast != 0) o["appearance"]["sclera_vessel_contrast"] = a.sclera_vessel_contrast;
   if (a.tear_film) o["appearance"]["tear_film"] = {{"sclera_roughness_deg", a.tear_film->sclera_roughness_deg}};
   // Without lids the head frame places nothing, and the format has none.
   if (a.eyelids) {

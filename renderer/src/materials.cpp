@@ -79,14 +79,14 @@ double diffuse_albedo(const Scene& scene, const Hit& hit) {
     case Surface::skin:
       // The lids' inner side: real lids rest on the globe, so what lies
       // behind their margins is dark, not a lit gap between lid and eye.
-      return hit.front_face ? scene.eyes[hit.eye].appearance().skin_albedo : 0.0;
+      return hit.front_face ? textured_skin_albedo(scene.eyes[hit.eye], hit.point) : 0.0;
     case Surface::mesh:
       return scene.meshes[hit.mesh].albedo;
     case Surface::lash:
       // Inside a lash (a ray from its own surface inward): nothing returns.
       return hit.front_face ? scene.eyes[hit.eye].appearance().face->lashes->albedo : 0.0;
     case Surface::sclera:
-      return hit.front_face ? scene.eyes[hit.eye].appearance().sclera_albedo : 0.0;
+      return hit.front_face ? textured_sclera_albedo(scene.eyes[hit.eye], hit.point) : 0.0;
     case Surface::iris: {
       const Eye& eye = scene.eyes[hit.eye];
       const Point3 local = eye.eye_from_world() * hit.point;

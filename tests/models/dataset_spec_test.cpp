@@ -375,6 +375,17 @@ TEST(DatasetSpec, TheScleraRoughnessReachesTheFirstEyesTearFilm) {
   }
 }
 
+TEST(DatasetSpec, TheTissueTexturesReachTheFirstEye) {
+  const DatasetSpec spec = spec_with(R"("parameters": {"skin_texture_contrast": {"uniform": [0, 0.5]},
+      "sclera_vessel_contrast": {"choice": [0.2, 0.6]}})");
+  for (std::uint64_t k : {0u, 3u}) {
+    const ImageDraw d = draw_image(spec, k);
+    const EyeAppearance& a = scene_for_image(spec, d).eyes[0].appearance();
+    EXPECT_EQ(a.skin_texture_contrast, column(spec, d, "skin_texture_contrast"));
+    EXPECT_EQ(a.sclera_vessel_contrast, column(spec, d, "sclera_vessel_contrast"));
+  }
+}
+
 TEST(DatasetSpec, ADrawNoEyeCanHaveIsNamedWithItsImageAndValues) {
   // A pupil of 6 mm in an iris of 5.9: the anatomy rule, at image 0.
   const DatasetSpec spec = spec_with(R"("parameters": {"pupil_radius_mm": {"uniform": [5.95, 6]}})");

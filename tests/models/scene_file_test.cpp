@@ -661,6 +661,26 @@ TEST(SceneFile, LashErrorsNameTheKeyAndTheRule) {
   }
 }
 
+TEST(SceneFile, ReadsTheTissueTexturesAndWritesThemBackOnlyWhenOn) {
+  const Scene scene = parse_scene(
+      eye_with(R"("appearance": { "skin_texture_contrast": 0.3, "sclera_vessel_contrast": 0.45 })"), "s.json");
+  EXPECT_EQ(scene.eyes[0].appearance().skin_texture_contrast, 0.3);
+  EXPECT_EQ(scene.eyes[0].appearance().sclera_vessel_contrast, 0.45);
+  const Scene back = parse_scene(scene_to_json(scene), "back.json");
+  EXPECT_EQ(back.eyes[0].appearance().skin_texture_contrast, 0.3);
+  EXPECT_EQ(back.eyes[0].appearance().sclera_vessel_contrast, 0.45);
+  const Scene plain = parse_scene(eye_with(R"("appearance": {})"), "s.json");
+  EXPECT_EQ(plain.eyes[0].appearance().skin_texture_contrast, 0.0);
+  EXPECT_EQ(scene_to_json(plain).find("skin_texture_contrast"), std::string::npos);
+  EXPECT_EQ(scene_to_json(plain).find("vessel"), std::string::npos);
+  EXPECT_EQ(parse_error(eye_with(R"("appearance": { "skin_texture_contrast": 1.5 })"))
+                .find("scene.json: eyes[0].appearance.skin_texture_contrast = 1.5: must be between 0 and 1"),
+            0u);
+  EXPECT_EQ(parse_error(eye_with(R"("appearance": { "sclera_vessel_contrast": -0.1 })"))
+                .find("scene.json: eyes[0].appearance.sclera_vessel_contrast = -0.1: must be between 0 and 1"),
+            0u);
+}
+
 TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
   const Scene scene = parse_scene(eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5 } })"), "s.json");
   ASSERT_TRUE(scene.eyes[0].appearance().tear_film);

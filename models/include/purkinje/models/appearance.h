@@ -198,6 +198,13 @@ struct EyeAppearance {
   std::uint64_t iris_seed = 1;         // the procedural texture's seed
   double sclera_albedo = 0.55;
   double skin_albedo = 0.45;
+  // Low-contrast albedo textures, seeded by iris_seed (the eye's texture
+  // seed): the skin's fine wrinkles, pores and blotches, the sclera's
+  // faint vessels. 0: uniform; up to 1 (docs/scene-format.md:
+  // appearance). Near-infrared skin shows little detail, and vessels
+  // little contrast.
+  double skin_texture_contrast = 0.0;
+  double sclera_vessel_contrast = 0.0;
   // Bright pupil: fraction of the light entering the pupil that the fundus
   // sends back toward its source (retro-reflection); 0 keeps the pupil dark.
   double fundus_reflectance = 0.05;

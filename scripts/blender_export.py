@@ -146,6 +146,11 @@ def export_eye(eye, appearance):
     m = eye.model
     if appearance.get("iris_texture_contrast", 0.5) != 0:
         refuse("a textured iris: set appearance.iris_texture_contrast to 0")
+    for key in ("skin_texture_contrast", "sclera_vessel_contrast"):
+        if appearance.get(key, 0) != 0:
+            refuse(f"a textured skin or sclera: set appearance.{key} to 0")
+    if "tear_film" in appearance:
+        refuse("a wet sclera (its highlights are drawn explicitly): remove appearance.tear_film")
     world_from_eye = np.array(eye.world_from_eye)
     matrix = np.eye(4)
     matrix[:3, :3] = world_from_eye[:3, :3]

@@ -460,7 +460,7 @@ struct Reader {
       }
     }
     const bool lids = scene.eyes.front().appearance().eyelids.has_value();
-    for (const char* name : {"lid_opening", "blink", "skin_albedo"}) {
+    for (const char* name : {"lid_opening", "blink", "skin_albedo", "skin_texture_contrast"}) {
       if (given(name) && !lids) where.at(name).fail("", "the scene's first eye has no eyelids (scene-format.md: eyelids)");
     }
     if (given("sclera_roughness_deg") && !scene.eyes.front().appearance().tear_film) {

@@ -61,13 +61,15 @@ void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* 
 // the cornea or nothing.
 double diffuse_albedo(const Scene& scene, const Hit& hit);
 
-// The skin's and the sclera's albedo textures (tissue_texture.cpp): in
-// about [-1.5, 0.5], mean 0; the albedo is the appearance's times
-// 1 + contrast x texture. Skin in the head frame's (x, y) in mm; sclera
-// by the turn about the eye's axis and the polar angle from it, about
-// the centre of rotation.
+// The skin's and the sclera's albedo textures (tissue_texture.cpp): the
+// skin's in about [-1.9, 0.45], the sclera's [-1.4, 0.12], mean 0; the
+// albedo is the appearance's times 1 + contrast x texture. Skin in the
+// head frame's (x, y) in mm (0 beyond 1e9 mm or for a non-finite point);
+// sclera by the turn about the eye's axis and the polar angle from it,
+// about the centre of rotation, its vessels fading in from
+// `seam_polar_rad` (the seam with the cornea's polar angle) on.
 double skin_texture(std::uint64_t seed, double x_mm, double y_mm);
-double sclera_texture(std::uint64_t seed, double turn, double polar_rad);
+double sclera_texture(std::uint64_t seed, double turn, double polar_rad, double seam_polar_rad);
 // The albedo at a world point of the eye's skin or sclera.
 double textured_skin_albedo(const Eye& eye, const Point3& world);
 double textured_sclera_albedo(const Eye& eye, const Point3& world);

@@ -78,11 +78,11 @@ double pore(std::uint64_t seed, double x_mm, double y_mm) {
 
 // The textures' means, added back so that the mean albedo is the
 // appearance's (the sclera's wherever its vessels fade in, so that the
-// sclera by the limbus keeps its albedo): measured over 20 seeds, the
-// skin's over 60 x 40 mm, the vessels' lines over the sphere from 0.9 to
-// 1.6 rad off the axis.
-constexpr double kSkinMeanDarkening = 0.0452;
-constexpr double kVesselMean = 0.1134;
+// sclera by the limbus keeps its albedo): measured over 2000 seeds, the
+// skin's over 60 x 40 mm, the vessels' lines where they are whole
+// (tissue_texture_test.cpp, DISABLED_MeasureTheMeansTheConstantsCancel).
+constexpr double kSkinMeanDarkening = 0.0439;
+constexpr double kVesselMean = 0.1118;
 
 double textured(double mean, double contrast, double texture) {
   const double a = mean * (1.0 + contrast * texture);
@@ -92,6 +92,8 @@ double textured(double mean, double contrast, double texture) {
 }  // namespace
 
 double skin_texture(std::uint64_t seed, double x_mm, double y_mm) {
+  // Lattice indices stay far inside int64.
+  if (!(std::abs(x_mm) < 1e9 && std::abs(y_mm) < 1e9)) return 0;
   // Fine wrinkles run along the lids (head x): zero lines of noise cells
   // 5 mm long by 0.8 mm across, and finer ones half that, each fading in
   // and out along its length (a second noise, 3 mm cells, gates it) so
@@ -103,12 +105,13 @@ double skin_texture(std::uint64_t seed, double x_mm, double y_mm) {
   return -0.6 * gate * wrinkles + 0.4 * blotches - 0.6 * pore(seed, x_mm, y_mm) + kSkinMeanDarkening;
 }
 
-double sclera_texture(std::uint64_t seed, double turn, double polar_rad) {
+double sclera_texture(std::uint64_t seed, double turn, double polar_rad, double seam_polar_rad) {
   // Vessels: zero lines of noise 60 cells per turn around the axis and
   // one per 0.25 rad (3 mm) from it, tortuous and mostly radial; finer
-  // ones, fainter, twice as dense; both fade out toward the limbus (the
-  // seam lies near 0.5 rad).
-  const double fade = smooth(std::clamp((polar_rad - 0.55) / 0.35, 0.0, 1.0));
+  // ones, fainter, twice as dense; both fade in from 0.05 rad (0.6 mm)
+  // past the seam with the cornea over 0.35 rad.
+  if (!(turn >= 0 && turn <= 1 && std::abs(polar_rad) < 10)) return 0;
+  const double fade = smooth(std::clamp((polar_rad - seam_polar_rad - 0.05) / 0.35, 0.0, 1.0));
   if (fade == 0) return 0;
   const double u = turn * 60, v = polar_rad / 0.25;
   const double vessels = zero_line(value_noise(seed, kVessels, u, v, 60), 0.1);
@@ -135,7 +138,12 @@ double textured_sclera_albedo(const Eye& eye, const Point3& world) {
   const double polar = std::atan2(std::hypot(d.x, d.y), d.z);
   double turn = std::atan2(d.y, d.x) * (0.5 / std::numbers::pi);
   if (turn < 0) turn += 1;
-  return textured(a.sclera_albedo, a.sclera_vessel_contrast, sclera_texture(mix64(a.iris_seed), turn, polar));
+  // The seam's polar angle about the centre of rotation (its height there
+  // over the sclera's radius).
+  const EyeModel& m = eye.model();
+  const double seam = std::acos(
+      std::clamp((m.rotation_center_depth_mm - m.sclera_seam_depth_mm()) / m.sclera_radius_mm, -1.0, 1.0));
+  return textured(a.sclera_albedo, a.sclera_vessel_contrast, sclera_texture(mix64(a.iris_seed), turn, polar, seam));
 }
 
 }  // namespace purkinje::renderer

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <random>
 #include <string>
 
@@ -17,27 +18,48 @@
 namespace purkinje::renderer {
 namespace {
 
-TEST(TissueTexture, AveragesToZeroOnSeedsAndAreasItWasNotMeasuredOn) {
-  // The constants were measured on seeds 7919 k (k = 1..20) over 60 x 40
-  // mm (the vessels from 0.9 to 1.6 rad); here 30 other seeds over another
-  // 40 x 40 mm, and the sclera by area from 0.95 to 1.5 rad, where the
-  // vessels are whole. The texture's spread is about 0.2, its seeds'
-  // means scatter by a few thousandths.
-  std::mt19937_64 rng(11);
+// Where the constants that keep the mean come from (tissue_texture.cpp):
+// the textures' means over 2000 seeds (7919 k), the skin over 60 x 40 mm
+// about the centre of rotation, the vessels where they are whole (1 to
+// 1.6 rad off the axis, by area). Run by hand:
+// renderer_tests --gtest_also_run_disabled_tests --gtest_filter='*Measure*'
+TEST(TissueTexture, DISABLED_MeasureTheMeansTheConstantsCancel) {
+  std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   double skin = 0, sclera = 0, weight = 0;
   int n = 0;
-  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
-    for (int k = 0; k < 20000; ++k) {
-      skin += skin_texture(seed * 104729, 100 + 40 * unit(rng), -60 + 40 * unit(rng));
-      const double polar = 0.95 + 0.55 * unit(rng), w = std::sin(polar);
-      sclera += w * sclera_texture(seed * 104729, unit(rng), polar);
+  for (std::uint64_t seed = 1; seed <= 2000; ++seed) {
+    for (int k = 0; k < 5000; ++k) {
+      skin += skin_texture(seed * 7919, -30 + 60 * unit(rng), -20 + 40 * unit(rng));
+      const double polar = 1.0 + 0.6 * unit(rng), w = std::sin(polar);
+      sclera += w * sclera_texture(seed * 7919, unit(rng), polar, 0.5);
       weight += w;
       ++n;
     }
   }
-  EXPECT_NEAR(skin / n, 0, 0.01);
-  EXPECT_NEAR(sclera / weight, 0, 0.015);
+  std::printf("left over: skin %.5f, sclera %.5f (subtract from the constants' negatives)\n", skin / n, sclera / weight);
+}
+
+TEST(TissueTexture, AveragesToZeroOnSeedsAndAreasItWasNotMeasuredOn) {
+  // Other seeds (104729 k) than the measurement's, the skin over another
+  // 40 x 40 mm, the sclera by area from 0.95 to 1.5 rad. The seeds' means
+  // scatter by about 0.01 each (the 5 mm blotches): 200 seeds leave under
+  // 0.002.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double skin = 0, sclera = 0, weight = 0;
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+    for (int k = 0; k < 3000; ++k) {
+      skin += skin_texture(seed * 104729, 100 + 40 * unit(rng), -60 + 40 * unit(rng));
+      const double polar = 0.95 + 0.55 * unit(rng), w = std::sin(polar);
+      sclera += w * sclera_texture(seed * 104729, unit(rng), polar, 0.5);
+      weight += w;
+      ++n;
+    }
+  }
+  EXPECT_NEAR(skin / n, 0, 0.004);
+  EXPECT_NEAR(sclera / weight, 0, 0.004);
 }
 
 TEST(TissueTexture, WrinklesRunAlongTheLidsAndVesselsFadeBeforeTheLimbus) {
@@ -54,14 +76,23 @@ TEST(TissueTexture, WrinklesRunAlongTheLidsAndVesselsFadeBeforeTheLimbus) {
     across += std::pow(skin_texture(5, x, y + 0.2) - t, 2);
   }
   EXPECT_GT(across, 2 * along) << along << " " << across;
-  // Nearer the limbus than 0.55 rad (the seam lies near 0.5): no vessel,
-  // the sclera's own albedo.
+  // Within 0.05 rad of the seam (here at 0.5 rad) and toward the cornea:
+  // no vessel, the sclera's own albedo; a seam farther out moves them.
   for (const double turn : {0.0, 0.3, 0.77}) {
-    EXPECT_EQ(sclera_texture(9, turn, 0.5), 0.0);
-    EXPECT_EQ(sclera_texture(9, turn, 0.3), 0.0);
+    EXPECT_EQ(sclera_texture(9, turn, 0.549, 0.5), 0.0);
+    EXPECT_EQ(sclera_texture(9, turn, 0.3, 0.5), 0.0);
+    EXPECT_EQ(sclera_texture(9, turn, 0.669, 0.62), 0.0);
+    EXPECT_NE(sclera_texture(9, turn, 0.669, 0.5), 0.0);  // fading in there
   }
-  // Periodic around the axis: no seam at turn 0.
-  for (const double polar : {0.9, 1.2}) EXPECT_NEAR(sclera_texture(9, 0.0, polar), sclera_texture(9, 1.0, polar), 1e-12);
+  // Periodic around the axis: no seam at turn 0, also on a vessel.
+  int on_a_vessel = 0;
+  for (int k = 0; k < 200; ++k) {
+    const double polar = 0.95 + 0.003 * k;
+    const double t = sclera_texture(9, 0.0, polar, 0.5);
+    EXPECT_NEAR(t, sclera_texture(9, 1 - 1e-12, polar, 0.5), 1e-9) << polar;
+    on_a_vessel += t < -0.05;
+  }
+  EXPECT_GT(on_a_vessel, 10);
   // The same seed, the same texture; another, another.
   EXPECT_EQ(skin_texture(5, 3.3, 1.1), skin_texture(5, 3.3, 1.1));
   int differ = 0;
@@ -83,6 +114,7 @@ TEST(TissueTexture, ARenderKeepsTheMeanLightAndGainsDetail) {
   plain.eyes[0].set_appearance(look);
   RenderOptions options;
   options.noise = false;
+  options.region = PixelRegion{40, 60, 360, 330};  // the eye and the lids about it
   const RenderResult a = render(plain, 0, options), b = render(textured, 0, options);
   for (const std::string cls : {"skin", "sclera"}) {
     const ImagePlane* coverage = nullptr;

@@ -380,7 +380,8 @@ TEST(DatasetSpec, TheTissueTexturesReachTheFirstEye) {
       "sclera_vessel_contrast": {"choice": [0.2, 0.6]}})");
   for (std::uint64_t k : {0u, 3u}) {
     const ImageDraw d = draw_image(spec, k);
-    const EyeAppearance& a = scene_for_image(spec, d).eyes[0].appearance();
+    const Scene scene = scene_for_image(spec, d);
+    const EyeAppearance& a = scene.eyes[0].appearance();
     EXPECT_EQ(a.skin_texture_contrast, column(spec, d, "skin_texture_contrast"));
     EXPECT_EQ(a.sclera_vessel_contrast, column(spec, d, "sclera_vessel_contrast"));
   }

@@ -50,6 +50,8 @@ for scene in remote headset; do
   measure "${scene}_wet" "assets/scenes/hard/${scene}_wet.json" "$hard" --max-gaze-deg 45 --variation-seed 2
 done
 measure headset_face assets/scenes/hard/headset_face.json "$hard" --variation-seed 6
+# The skin's and sclera's textures (session 31): the same draws, textured.
+measure headset_face_textured assets/scenes/hard/headset_face_textured.json "$hard" --variation-seed 6
 measure remote_face assets/scenes/remote_face.json "$hard" --variation-seed 6
 # Glints on the pupil's edge: pupils as wide as the glints' spread (the
 # remote's two glints lie near the pupil's centre unless the eye turns).

@@ -49,6 +49,13 @@ bool scene_has_lashes(const Scene& scene) {
   return false;
 }
 
+bool scene_has_tear_film(const Scene& scene) {
+  for (const Eye& eye : scene.eyes) {
+    if (eye.appearance().tear_film) return true;
+  }
+  return false;
+}
+
 PixelClass class_of(Surface s) {
   switch (s) {
     case Surface::skin: return PixelClass::skin;

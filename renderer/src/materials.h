@@ -53,6 +53,8 @@ PixelClass class_of(Surface s);
 // Whether any eye of the scene has lashes (its images then have a lash
 // class and coverage plane).
 bool scene_has_lashes(const Scene& scene);
+// Whether any eye has a tear film (a wet sclera's highlights, their mask).
+bool scene_has_tear_film(const Scene& scene);
 // Fills `record` (when given) from the first hit of a camera ray's
 // transmitted chain: depth, normal and class.
 void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* record);

@@ -418,13 +418,6 @@ void image_distractors(const Scene& scene, int camera_index, SceneTruth& truth, 
   }
 }
 
-bool scene_has_tear_film(const Scene& scene) {
-  for (const Eye& eye : scene.eyes) {
-    if (eye.appearance().tear_film) return true;
-  }
-  return false;
-}
-
 // A glint mask: the fraction of a pixel's signal that the glint carries
 // (computed in the glint's own plane, replaced by the fraction).
 ImagePlane fraction_of_signal(ImagePlane& part, const ImagePlane& electrons) {

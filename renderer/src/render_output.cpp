@@ -118,9 +118,7 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
   }
   render["glints"] = glints;
   // Only when some eye has a tear film: each view's distractors in order.
-  bool wet = false;
-  for (const Eye& eye : scene.eyes) wet = wet || eye.appearance().tear_film.has_value();
-  if (wet) {
+  if (scene_has_tear_film(scene)) {
     json distractors = json::array();
     for (const GlintImage& d : result.distractors) {
       const double* c = d.radiometry.roughness_cov_px2;
@@ -166,12 +164,7 @@ std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions
   if (options.per_light_glint_masks) {
     for (const Illuminator& light : scene.illuminators) names.push_back("glint." + light.name);
   }
-  for (const Eye& eye : scene.eyes) {
-    if (eye.appearance().tear_film) {
-      names.push_back("distractor");
-      break;
-    }
-  }
+  if (scene_has_tear_film(scene)) names.push_back("distractor");
   return names;
 }
 

@@ -31,6 +31,20 @@ std::filesystem::path write(const nlohmann::json& j, const std::string& name) {
   return file;
 }
 
+// Reading `j` fails with a message naming its file, `key` and `rule`.
+void expect_error(const nlohmann::json& j, const std::string& key, const std::string& rule) {
+  const std::filesystem::path file = write(j, "image_labels_bad.json");
+  try {
+    read_image_labels(file);
+    ADD_FAILURE() << key << ": read";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(file.string()), std::string::npos) << what;
+    EXPECT_NE(what.find(key), std::string::npos) << what;
+    EXPECT_NE(what.find(rule), std::string::npos) << what;
+  }
+}
+
 TEST(ImageLabels, ReadsBackTheImagePlaneValues) {
   const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/headset.json");
   const SceneTruth truth = compute_truth(scene);
@@ -64,18 +78,6 @@ TEST(ImageLabels, ReadsBackTheImagePlaneValues) {
 TEST(ImageLabels, NamesTheFileKeyAndRuleOfABadFile) {
   const Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/remote.json");
   const nlohmann::json good = rendered_labels(scene, compute_truth(scene));
-  const auto expect_error = [](const nlohmann::json& j, const std::string& key, const std::string& rule) {
-    const std::filesystem::path file = write(j, "image_labels_bad.json");
-    try {
-      read_image_labels(file);
-      ADD_FAILURE() << key << ": read";
-    } catch (const std::runtime_error& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find(file.string()), std::string::npos) << what;
-      EXPECT_NE(what.find(key), std::string::npos) << what;
-      EXPECT_NE(what.find(rule), std::string::npos) << what;
-    }
-  };
   nlohmann::json j = good;
   j["views"][0]["glints"][1]["status"] = "shiny";
   expect_error(j, "views[0].glints[1].status = \"shiny\"", "path status");
@@ -139,15 +141,6 @@ TEST(ImageLabels, ReadsAWetEyesDistractorsAndNamesABadOne) {
   EXPECT_TRUE(read_image_labels(write(rendered_labels(dry, compute_truth(dry)), "image_labels_dry.json"))
                   .views[0].distractors.empty());
 
-  const auto expect_error = [](const nlohmann::json& j, const std::string& key, const std::string& rule) {
-    try {
-      read_image_labels(write(j, "image_labels_bad_distractor.json"));
-      ADD_FAILURE() << key << ": read";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(rule), std::string::npos) << e.what();
-    }
-  };
   nlohmann::json j = good;
   j["views"][0]["distractors"][1]["kind"] = "lens";
   expect_error(j, "views[0].distractors[1].kind = \"lens\"", "must be \"sclera\"");

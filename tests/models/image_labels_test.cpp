@@ -31,9 +31,11 @@ std::filesystem::path write(const nlohmann::json& j, const std::string& name) {
   return file;
 }
 
-// Reading `j` fails with a message naming its file, `key` and `rule`.
+// Reading `j` fails with a message naming its file, `key` and `rule`. The
+// file is named after the running test: ctest runs tests in parallel.
 void expect_error(const nlohmann::json& j, const std::string& key, const std::string& rule) {
-  const std::filesystem::path file = write(j, "image_labels_bad.json");
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const std::filesystem::path file = write(j, "image_labels_bad_" + test + ".json");
   try {
     read_image_labels(file);
     ADD_FAILURE() << key << ": read";

@@ -104,6 +104,7 @@ const std::vector<ParameterRule>& scene_rules() {
       {"skin_albedo", T::real, 0, 1},
       {"fundus_reflectance", T::real, 0, 1},
       {"sclera_roughness_deg", T::real, 0, 10},
+      {"meniscus_radius_mm", T::real, 0, 1},
       {"skin_texture_contrast", T::real, 0, 1},
       {"sclera_vessel_contrast", T::real, 0, 1},
       {"cornea_radius_mm", T::real, 0, 100, true},
@@ -463,8 +464,10 @@ struct Reader {
     for (const char* name : {"lid_opening", "blink", "skin_albedo", "skin_texture_contrast"}) {
       if (given(name) && !lids) where.at(name).fail("", "the scene's first eye has no eyelids (scene-format.md: eyelids)");
     }
-    if (given("sclera_roughness_deg") && !scene.eyes.front().appearance().tear_film) {
-      where.at("sclera_roughness_deg").fail("", "the scene's first eye has no tear film (scene-format.md: tear film)");
+    for (const char* name : {"sclera_roughness_deg", "meniscus_radius_mm"}) {
+      if (given(name) && !scene.eyes.front().appearance().tear_film) {
+        where.at(name).fail("", "the scene's first eye has no tear film (scene-format.md: tear film)");
+      }
     }
     const bool face = scene.eyes.front().appearance().face.has_value();
     for (const FaceKey& key : kFaceKeys) {
@@ -744,6 +747,7 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (auto v = value("sclera_vessel_contrast")) look.sclera_vessel_contrast = *v;
   if (look.tear_film) {
     if (auto v = value("sclera_roughness_deg")) look.tear_film->sclera_roughness_deg = *v;
+    if (auto v = value("meniscus_radius_mm")) look.tear_film->meniscus_radius_mm = *v;
   }
   if (look.eyelids) {
     if (auto v = value("lid_opening")) look.eyelids->opening = *v;

@@ -187,7 +187,13 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
         const std::string distractor_path = path + ".distractors[" + std::to_string(d) + "]";
         DistractorTruth truth;
         const json& kind = r.member(distractors[d], distractor_path, "kind");
-        if (kind != to_string(DistractorKind::sclera)) r.fail(distractor_path + ".kind", &kind, "must be \"sclera\"");
+        if (kind == to_string(DistractorKind::sclera)) {
+          truth.kind = DistractorKind::sclera;
+        } else if (kind == to_string(DistractorKind::tear_meniscus)) {
+          truth.kind = DistractorKind::tear_meniscus;
+        } else {
+          r.fail(distractor_path + ".kind", &kind, "must be \"sclera\" or \"tear_meniscus\"");
+        }
         truth.illuminator = r.integer(distractors[d], distractor_path, "illuminator", 0, lights - 1);
         truth.status = r.status(distractors[d], distractor_path);
         truth.pixel = r.pixel(distractors[d], distractor_path);

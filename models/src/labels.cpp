@@ -165,7 +165,10 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   // The textures and the tear film only when on (as in scene files).
   if (a.skin_texture_contrast != 0) look["skin_texture_contrast"] = number(a.skin_texture_contrast);
   if (a.sclera_vessel_contrast != 0) look["sclera_vessel_contrast"] = number(a.sclera_vessel_contrast);
-  if (a.tear_film) look["tear_film"] = {{"sclera_roughness_deg", number(a.tear_film->sclera_roughness_deg)}};
+  if (a.tear_film) {
+    look["tear_film"] = {{"sclera_roughness_deg", number(a.tear_film->sclera_roughness_deg)},
+                         {"meniscus_radius_mm", number(a.tear_film->meniscus_radius_mm)}};
+  }
   out["appearance"] = look;
   return out;
 }

@@ -460,6 +460,8 @@ EyeAppearance read_appearance(Object& e) {
       // Beyond 10 deg a highlight spreads over a third of the sclera's
       // radius and its spread's first-order form no longer holds.
       t.sclera_roughness_deg = film->within_or("sclera_roughness_deg", 0, 10, t.sclera_roughness_deg);
+      // Past 1 mm tears run over the lid (epiphora), no meniscus.
+      t.meniscus_radius_mm = film->within_or("meniscus_radius_mm", 0, 1, t.meniscus_radius_mm);
       film->finish();
       a.tear_film = t;
     }
@@ -796,7 +798,10 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
   // The textures only when on (every older scene's dump keeps its bytes).
   if (a.skin_texture_contrast != 0) o["appearance"]["skin_texture_contrast"] = a.skin_texture_contrast;
   if (a.sclera_vessel_contrast != 0) o["appearance"]["sclera_vessel_contrast"] = a.sclera_vessel_contrast;
-  if (a.tear_film) o["appearance"]["tear_film"] = {{"sclera_roughness_deg", a.tear_film->sclera_roughness_deg}};
+  if (a.tear_film) {
+    o["appearance"]["tear_film"] = {{"sclera_roughness_deg", a.tear_film->sclera_roughness_deg},
+                                    {"meniscus_radius_mm", a.tear_film->meniscus_radius_mm}};
+  }
   // Without lids the head frame places nothing, and the format has none.
   if (a.eyelids) {
     const Eyelids& l = *a.eyelids;

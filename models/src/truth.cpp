@@ -39,8 +39,31 @@ const char* to_string(Occluder o) {
 const char* to_string(DistractorKind kind) {
   switch (kind) {
     case DistractorKind::sclera: return "sclera";
+    case DistractorKind::tear_meniscus: return "tear_meniscus";
   }
   return "unknown";
+}
+
+DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
+                                 const Eye& eye, int light, const Camera& camera, const TruthOptions& options) {
+  DistractorTruth d;
+  d.kind = kind;
+  d.illuminator = light;
+  d.reflection = highlight;
+  d.status = image_of(highlight.status, highlight.point, camera, d.pixel);
+  if (d.status == PathStatus::ok) {
+    // The cornea stands out of the sclera's sphere: it can hide a
+    // highlight near the limbus. What the camera sees in front of the
+    // highlight comes first, then what shadows it (as for glints).
+    const auto blocker = [&](const Point3& end) {
+      if (eye.cap_crosses(highlight.point, end)) return Occluder::eye;
+      return options.occluded ? options.occluded(highlight.point, end) : Occluder::none;
+    };
+    d.occluder = blocker(camera.center());
+    if (d.occluder == Occluder::none) d.occluder = blocker(scene.illuminators.at(light).position);
+    if (d.occluder != Occluder::none) d.status = PathStatus::occluded;
+  }
+  return d;
 }
 
 RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
@@ -84,25 +107,9 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
       }
       if (eye.appearance().tear_film) {
         for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
-          DistractorTruth d;
-          d.kind = DistractorKind::sclera;
-          d.illuminator = l;
-          d.reflection = solve_scleral_reflection(eye, scene.illuminators[l].position, camera.center());
-          if (d.reflection.status != PathStatus::ok) continue;
-          d.status = image_of(d.reflection.status, d.reflection.point, camera, d.pixel);
-          if (d.status == PathStatus::ok) {
-            // The cornea stands out of the sclera's sphere: it can hide a
-            // highlight near the limbus. What the camera sees in front of
-            // the highlight comes first, then what shadows it (as for glints).
-            const auto blocker = [&](const Point3& end) {
-              if (eye.cap_crosses(d.reflection.point, end)) return Occluder::eye;
-              return options.occluded ? options.occluded(d.reflection.point, end) : Occluder::none;
-            };
-            d.occluder = blocker(camera.center());
-            if (d.occluder == Occluder::none) d.occluder = blocker(scene.illuminators[l].position);
-            if (d.occluder != Occluder::none) d.status = PathStatus::occluded;
-          }
-          view.distractors.push_back(d);
+          const Reflection r = solve_scleral_reflection(eye, scene.illuminators[l].position, camera.center());
+          if (r.status != PathStatus::ok) continue;
+          view.distractors.push_back(distractor_truth(DistractorKind::sclera, r, scene, eye, l, camera, options));
         }
       }
       std::vector<Pixel> ok_pixels, visible_pixels;

@@ -106,7 +106,8 @@ class GlintLabel:
 @dataclass(frozen=True)
 class DistractorLabel:
     """A highlight that is no Purkinje image (docs/labels.md, views[k].distractors[j]):
-    kind "sclera", one light mirrored by a wet sclera's tear film."""
+    kind "sclera", one light mirrored by a wet sclera's tear film, or
+    "tear_meniscus", by the lower lid's tear meniscus (render labels only)."""
 
     kind: str
     illuminator: int

@@ -81,11 +81,6 @@ double face_depth(const Face& face, double apex, double n, double y) {
   return smooth_max(z, flank, 4.0);
 }
 
-// -1 at the lateral canthus, 0 at the middle, 1 at the medial canthus.
-double fissure_coordinate(const Eyelids& lids, const Face& face, double x) {
-  const double n = face.side == EyeSide::right ? x : -x;
-  return n / (n >= 0 ? lids.half_width_mm : face.lateral_canthus_mm);
-}
 
 double margin_turned(double m, double x, double radius, const surfaces::MarginTurn& turn) {
   // The margin point on a sphere of `radius` about the centre of rotation,
@@ -94,11 +89,12 @@ double margin_turned(double m, double x, double radius, const surfaces::MarginTu
   return m * turn.cos + z * turn.sin;
 }
 
-// The margins' heights at x (head frame), as the mesh's row 0 has them.
-struct FissureMargins {
-  double upper_mm = 0;
-  double lower_mm = 0;
-};
+}  // namespace
+
+double fissure_coordinate(const Eyelids& lids, const Face& face, double x) {
+  const double n = face.side == EyeSide::right ? x : -x;
+  return n / (n >= 0 ? lids.half_width_mm : face.lateral_canthus_mm);
+}
 
 FissureMargins fissure_margins(const Eyelids& lids, const Face& face, double sclera_radius_mm,
                                const surfaces::MarginTurns& turns, double x) {
@@ -121,8 +117,6 @@ FissureMargins fissure_margins(const Eyelids& lids, const Face& face, double scl
   if (m.upper_mm < m.lower_mm) m.upper_mm = m.lower_mm = 0.5 * (m.upper_mm + m.lower_mm);
   return m;
 }
-
-}  // namespace
 
 FaceMesh build_face_mesh(const Eye& eye, const Pose& world_from_head, const surfaces::MarginTurns& turns,
                          const SupportDepth& support_depth, bool alone) {

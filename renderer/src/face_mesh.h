@@ -65,6 +65,19 @@ struct FaceMesh {
   MarginEdge upper_edge, lower_edge;
 };
 
+// -1 at the lateral canthus, 0 at the middle, 1 at the medial canthus, at
+// head-frame x.
+double fissure_coordinate(const Eyelids& lids, const Face& face, double x);
+
+// The margins' heights (head-frame y) at x, as the mesh's row 0 has them:
+// where the margins' posterior edges meet the globe.
+struct FissureMargins {
+  double upper_mm = 0;
+  double lower_mm = 0;
+};
+FissureMargins fissure_margins(const Eyelids& lids, const Face& face, double sclera_radius_mm,
+                               const surfaces::MarginTurns& turns, double x);
+
 // `support_depth(x, y)`: the head-frame z where a ray along -z from
 // (x, y, far in front) first meets the eye's outer surfaces, or nothing.
 using SupportDepth = std::function<std::optional<double>(double x, double y)>;

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "purkinje/renderer/radiometry.h"
+#include "mirror_radiometry.h"
 #include "purkinje/models/check.h"
 
 namespace purkinje::renderer {
@@ -49,22 +49,22 @@ std::optional<Vector3> difference(const Sample& sample, const Vector3& centre, d
   return std::nullopt;
 }
 
-// Any unit vector perpendicular to d.
+GlintRadiometry failed(PathStatus status) { return failed_radiometry(status); }
+
+}  // namespace
+
 UnitVector3 perpendicular(const UnitVector3& d) {
   const Vector3 any = std::abs(d.x()) < 0.9 ? Vector3{1, 0, 0} : Vector3{0, 1, 0};
   return UnitVector3::normalize(any - d.vector() * dot(any, d));
 }
 
-GlintRadiometry failed(PathStatus status) {
+GlintRadiometry failed_radiometry(PathStatus status) {
   GlintRadiometry out;
   out.status = status;
   return out;
 }
 
-// A mirror: its reflection from a source toward a target, as the solver finds it.
-using Mirror = std::function<Reflection(const Point3& source, const Point3& target)>;
-
-void check_inputs(const Illuminator& light, const Camera& camera) {
+void check_radiometry_inputs(const Illuminator& light, const Camera& camera) {
   require_non_negative("light '" + light.name + "': radiant_intensity_w_sr",
                        light.radiant_intensity_w_sr);
   require_non_negative("light '" + light.name + "': emitter_diameter_mm",
@@ -74,8 +74,6 @@ void check_inputs(const Illuminator& light, const Camera& camera) {
                    camera.sensor().pixel_pitch_mm);
 }
 
-// Power and the LED disc's image for a reflection (status ok) off
-// `mirror`, whose inside has index `inner_index`.
 GlintRadiometry mirror_radiometry(const Mirror& mirror, double inner_index, const Illuminator& light,
                                   const Camera& camera, const Reflection& reflection) {
   GlintRadiometry out;
@@ -150,11 +148,53 @@ GlintRadiometry mirror_radiometry(const Mirror& mirror, double inner_index, cons
   return out;
 }
 
-}  // namespace
+bool roughness_spread(const double shape[3], const UnitVector3& t1, const UnitVector3& t2, double sigma_rad,
+                      const Illuminator& light, const Camera& camera, const Reflection& reflection,
+                      double cov_px2[3]) {
+  const Point3& x = reflection.point;
+  const Vector3 to_light = -reflection.incident.vector(), to_camera = reflection.reflected.vector();
+  const double d_s = distance(light.position, x), d_c = distance(camera.center(), x);
+  const double half_norm = (to_light + to_camera).norm();  // 2 cos(incidence)
+  // t_a . (S + [P_s/d_s + P_c/d_c] / |s + c|) t_b; dot(t1, t2) = 0.
+  const auto m = [&](const UnitVector3& a, const UnitVector3& b, double a_dot_b, double s_ab) {
+    const double p_s = a_dot_b - dot(a, to_light) * dot(b, to_light);
+    const double p_c = a_dot_b - dot(a, to_camera) * dot(b, to_camera);
+    return s_ab + (p_s / d_s + p_c / d_c) / half_norm;
+  };
+  const double m11 = m(t1, t1, 1, shape[0]), m12 = m(t1, t2, 0, shape[1]), m22 = m(t2, t2, 1, shape[2]);
+  // M^-1 (symmetric); the spread on the surface is sigma^2 M^-2.
+  const double det = m11 * m22 - m12 * m12;
+  const double i11 = m22 / det, i12 = -m12 / det, i22 = m11 / det;
+  const double s11 = sigma_rad * sigma_rad * (i11 * i11 + i12 * i12);
+  const double s12 = sigma_rad * sigma_rad * (i11 * i12 + i12 * i22);
+  const double s22 = sigma_rad * sigma_rad * (i12 * i12 + i22 * i22);
+  // The camera's projection of tangent moves on the surface.
+  const double step = kRelativeStep * d_c;
+  const auto pixel_along = [&](const UnitVector3& t) -> std::optional<Vector3> {
+    const Projection plus = camera.project(x + t * step), minus = camera.project(x - t * step);
+    if (plus.status == ProjectionStatus::behind_camera || minus.status == ProjectionStatus::behind_camera) {
+      return std::nullopt;
+    }
+    return Vector3{plus.pixel.u - minus.pixel.u, plus.pixel.v - minus.pixel.v, 0} / (2 * step);
+  };
+  const std::optional<Vector3> j1 = pixel_along(t1), j2 = pixel_along(t2);
+  if (!j1 || !j2 || det == 0) return false;
+  // J S J^T with J = [j1 j2] (columns: pixel per mm along t1, t2).
+  const auto cov = [&](double a_u, double a_v, double b_u, double b_v) {
+    return a_u * (s11 * b_u + s12 * b_v) + a_v * (s12 * b_u + s22 * b_v);
+  };
+  cov_px2[0] = cov(j1->x, j2->x, j1->x, j2->x);
+  cov_px2[1] = cov(j1->x, j2->x, j1->y, j2->y);
+  cov_px2[2] = cov(j1->y, j2->y, j1->y, j2->y);
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(cov_px2[i])) return false;
+  }
+  return true;
+}
 
 GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
                                  const Reflection& reflection) {
-  check_inputs(light, camera);
+  check_radiometry_inputs(light, camera);
   if (reflection.status != PathStatus::ok) return failed(reflection.status);
   if (!reflection.on_cap) return failed(PathStatus::off_cornea);
   const Mirror cornea = [&](const Point3& source, const Point3& target) {
@@ -165,7 +205,7 @@ GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const
 
 GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& film, const Illuminator& light,
                                              const Camera& camera, const Reflection& reflection) {
-  check_inputs(light, camera);
+  check_radiometry_inputs(light, camera);
   require_non_negative("tear_film.sclera_roughness_deg", film.sclera_roughness_deg);
   if (reflection.status != PathStatus::ok) return failed(reflection.status);
   // The sphere goes on smoothly under the cornea: neighbours of a
@@ -177,47 +217,14 @@ GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& fil
   };
   GlintRadiometry out = mirror_radiometry(sphere, kTearFilmIndex, light, camera, reflection);
   if (out.status != PathStatus::ok || film.sclera_roughness_deg == 0) return out;
-
-  const Point3& x = reflection.point;
+  // A sphere: S = I / R in any tangent basis.
   const UnitVector3 t1 = perpendicular(reflection.normal);
   const UnitVector3 t2 = UnitVector3::normalize(cross(reflection.normal, t1));
-  const Vector3 to_light = -reflection.incident.vector(), to_camera = reflection.reflected.vector();
-  const double d_s = distance(light.position, x), d_c = distance(camera.center(), x);
-  const double half_norm = (to_light + to_camera).norm();  // 2 cos(incidence)
-  // t_a . (I/R + [P_s/d_s + P_c/d_c] / |s + c|) t_b; dot(t1, t2) = 0.
-  const auto m = [&](const UnitVector3& a, const UnitVector3& b, double a_dot_b) {
-    const double p_s = a_dot_b - dot(a, to_light) * dot(b, to_light);
-    const double p_c = a_dot_b - dot(a, to_camera) * dot(b, to_camera);
-    return a_dot_b / R + (p_s / d_s + p_c / d_c) / half_norm;
-  };
-  const double m11 = m(t1, t1, 1), m12 = m(t1, t2, 0), m22 = m(t2, t2, 1);
-  // M^-1 (symmetric); the spread on the sphere is sigma^2 M^-2.
-  const double det = m11 * m22 - m12 * m12;
-  const double i11 = m22 / det, i12 = -m12 / det, i22 = m11 / det;
+  const double shape[3] = {1 / R, 0, 1 / R};
   const double sigma = film.sclera_roughness_deg * kPi / 180;
-  const double s11 = sigma * sigma * (i11 * i11 + i12 * i12);
-  const double s12 = sigma * sigma * (i11 * i12 + i12 * i22);
-  const double s22 = sigma * sigma * (i12 * i12 + i22 * i22);
-  // The camera's projection of tangent moves on the sphere.
-  const double step = kRelativeStep * d_c;
-  const auto pixel_along = [&](const UnitVector3& t) -> std::optional<Vector3> {
-    const Projection plus = camera.project(x + t * step), minus = camera.project(x - t * step);
-    if (plus.status == ProjectionStatus::behind_camera || minus.status == ProjectionStatus::behind_camera) {
-      return std::nullopt;
-    }
-    return Vector3{plus.pixel.u - minus.pixel.u, plus.pixel.v - minus.pixel.v, 0} / (2 * step);
-  };
-  const std::optional<Vector3> j1 = pixel_along(t1), j2 = pixel_along(t2);
-  if (!j1 || !j2 || !(det > 0)) return failed(PathStatus::not_converged);
-  // J S J^T with J = [j1 j2] (columns: pixel per mm along t1, t2).
-  const auto cov = [&](double a_u, double a_v, double b_u, double b_v) {
-    return a_u * (s11 * b_u + s12 * b_v) + a_v * (s12 * b_u + s22 * b_v);
-  };
-  out.roughness_cov_px2[0] = cov(j1->x, j2->x, j1->x, j2->x);
-  out.roughness_cov_px2[1] = cov(j1->x, j2->x, j1->y, j2->y);
-  out.roughness_cov_px2[2] = cov(j1->y, j2->y, j1->y, j2->y);
-  for (const double c : out.roughness_cov_px2) {
-    if (!std::isfinite(c)) return failed(PathStatus::not_converged);
+  // A convex sphere's M is positive definite: no caustic.
+  if (!roughness_spread(shape, t1, t2, sigma, light, camera, reflection, out.roughness_cov_px2)) {
+    return failed(PathStatus::not_converged);
   }
   return out;
 }

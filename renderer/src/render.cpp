@@ -21,11 +21,13 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include "film.h"
 #include "integrator.h"
 #include "pixel_filter.h"
 #include "sampler.h"
+#include "tear_meniscus.h"
 #include "purkinje/models/check.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/sensor_model.h"
@@ -365,15 +367,40 @@ void image_glints(const Scene& scene, int camera_index, SceneTruth& truth, const
   }
 }
 
-// Distractors: each view's scleral highlights whose light reaches the
-// camera, as light on the sclera before the optics (the LED disc's image
-// and the facets' spread, no point spread): each drawn alone into
-// `scratch` (zeros, left so), kept where the camera sees sclera (its
-// coverage of each pixel) and added to `light`. Described in `images` in
-// the truth's order, with the electrons the image holds. A highlight whose
-// radiometry fails is not drawn, and its label says why.
-void image_distractors(const Scene& scene, int camera_index, SceneTruth& truth, const ImagePlane& sclera,
-                       ImagePlane& scratch, ImagePlane& light, std::vector<GlintImage>& images) {
+// The highlights of the tear menisci of `camera_index`'s views' eyes,
+// appended to their distractors (after the sclera's) in light order, each
+// light's along the lid.
+void add_meniscus_highlights(const Scene& scene, int camera_index, const std::vector<TearMeniscus>& menisci,
+                             const TruthOptions& options, SceneTruth& truth) {
+  const Camera& camera = scene.cameras[camera_index];
+  for (const TearMeniscus& meniscus : menisci) {
+    for (EyeInCameraTruth& view : truth.views) {
+      if (view.camera != camera_index || view.eye != meniscus.eye()) continue;
+      const Eye& eye = scene.eyes[view.eye];
+      for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
+        for (const Reflection& r : meniscus.highlights(scene.illuminators[l].position, camera.center())) {
+          view.distractors.push_back(
+              distractor_truth(DistractorKind::tear_meniscus, r, scene, eye, l, camera, options));
+        }
+      }
+    }
+  }
+}
+
+// Distractors: each view's highlights whose light reaches the camera.
+// Scleral ones as light before the optics (the LED disc's image and the
+// facets' spread, no point spread): each drawn alone into `scratch`
+// (zeros, left so), kept where the camera sees sclera (its coverage of
+// each pixel) and added to `light`, which the caller blurs. A meniscus's
+// as a glint's, through the optics (`psf`) and whole, into `sharp`: the
+// strip of tears it lies on is narrower than a pixel, and a mask drawn
+// before the point spread would round the highlight to its pixel.
+// Described in `images` in the truth's order, with the electrons the image
+// holds. A highlight whose radiometry fails is not drawn, and its label
+// says why.
+void image_distractors(const Scene& scene, int camera_index, const std::vector<TearMeniscus>& menisci,
+                       const PointSpread& psf, SceneTruth& truth, const ImagePlane& sclera, ImagePlane& scratch,
+                       ImagePlane& light, ImagePlane& sharp, std::vector<GlintImage>& images) {
   const Camera& camera = scene.cameras[camera_index];
   for (EyeInCameraTruth& view : truth.views) {
     if (view.camera != camera_index) continue;
@@ -384,8 +411,15 @@ void image_distractors(const Scene& scene, int camera_index, SceneTruth& truth, 
       image.illuminator = d.illuminator;
       image.status = d.status;
       const Illuminator& led = scene.illuminators[d.illuminator];
+      const bool on_sclera = d.kind == DistractorKind::sclera;
       if (d.status == PathStatus::ok) {
-        image.radiometry = scleral_highlight_radiometry(eye, *eye.appearance().tear_film, led, camera, d.reflection);
+        if (on_sclera) {
+          image.radiometry = scleral_highlight_radiometry(eye, *eye.appearance().tear_film, led, camera, d.reflection);
+        } else {
+          const auto meniscus = std::find_if(menisci.begin(), menisci.end(),
+                                             [&](const TearMeniscus& m) { return m.eye() == view.eye; });
+          image.radiometry = meniscus_highlight_radiometry(*meniscus, led, camera, d.reflection);
+        }
         if (image.radiometry.status != PathStatus::ok) d.status = image.status = image.radiometry.status;
         const double whole = image.radiometry.power_w * electrons_per_watt(camera.sensor(), led.wavelength_nm) *
                              lens_illumination(camera, d.pixel.u, d.pixel.v);
@@ -393,19 +427,22 @@ void image_distractors(const Scene& scene, int camera_index, SceneTruth& truth, 
           const double* a = image.radiometry.source_cov_px2;
           const double* b = image.radiometry.roughness_cov_px2;
           const double cov[3] = {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-          add_point_image(scratch, d.pixel.u, d.pixel.v, whole, PointSpread{0, 0}, cov);
+          const PointSpread spread = on_sclera ? PointSpread{0, 0} : psf;
+          add_point_image(scratch, d.pixel.u, d.pixel.v, whole, spread, cov);
           // add_point_image reaches 5 sigma (or the nearest pixel).
-          const int half_u = static_cast<int>(std::ceil(5 * std::sqrt(cov[0]))) + 2;
-          const int half_v = static_cast<int>(std::ceil(5 * std::sqrt(cov[2]))) + 2;
+          const double isotropic = spread.sigma_px * spread.sigma_px + 0.25 * spread.defocus_radius_px * spread.defocus_radius_px;
+          const int half_u = static_cast<int>(std::ceil(5 * std::sqrt(cov[0] + isotropic))) + 2;
+          const int half_v = static_cast<int>(std::ceil(5 * std::sqrt(cov[2] + isotropic))) + 2;
           const int x0 = std::max(0, static_cast<int>(std::floor(d.pixel.u)) - half_u);
           const int x1 = std::min(light.width - 1, static_cast<int>(std::ceil(d.pixel.u)) + half_u);
           const int y0 = std::max(0, static_cast<int>(std::floor(d.pixel.v)) - half_v);
           const int y1 = std::min(light.height - 1, static_cast<int>(std::ceil(d.pixel.v)) + half_v);
+          ImagePlane& target = on_sclera ? light : sharp;
           double seen = 0;
           for (int y = y0; y <= y1; ++y) {
             for (int x = x0; x <= x1; ++x) {
-              const float e = scratch.at(x, y) * sclera.at(x, y);
-              light.at(x, y) += e;
+              const float e = on_sclera ? scratch.at(x, y) * sclera.at(x, y) : scratch.at(x, y);
+              target.at(x, y) += e;
               seen += e;
               scratch.at(x, y) = 0;
             }
@@ -469,6 +506,10 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
     }
   };
   result.truth = compute_truth(scene, truth_options);
+  // The lower lids' tear menisci: the faces' margins are built here, so
+  // their highlights join the labels here.
+  const std::vector<TearMeniscus> menisci = build_tear_menisci(scene);
+  add_meniscus_highlights(scene, camera_index, menisci, truth_options, result.truth);
 
   const int spp = options.samples_per_pixel;
   const int edge_spp = edge_samples_per_pixel(options);
@@ -526,13 +567,15 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
   const bool distractors = scene_has_tear_film(scene);
   ImagePlane distractor_total;
   if (distractors) {
-    ImagePlane light = pool.take(), spot = pool.take();
-    image_distractors(scene, camera_index, result.truth, film.coverage(PixelClass::sclera), spot, light,
-                      result.distractors);
+    ImagePlane light = pool.take(), spot = pool.take(), sharp = pool.take();
+    image_distractors(scene, camera_index, menisci, psf, result.truth, film.coverage(PixelClass::sclera), spot,
+                      light, sharp, result.distractors);
     pool.give(spot);
     distractor_total = pool.take();
     arena.execute([&] { blur(light, psf, distractor_total, scratch); });
     pool.give(light);
+    for (std::size_t i = 0; i < sharp.values.size(); ++i) distractor_total.values[i] += sharp.values[i];
+    pool.give(sharp);
     for (std::size_t i = 0; i < distractor_total.values.size(); ++i) {
       result.electrons.values[i] += distractor_total.values[i];
     }
@@ -564,15 +607,23 @@ struct Highlight {
   GlintImage image;
   int from_middle = 0;
 };
+// Which highlight it is across the instants: eye, kind, light, and its
+// place among that light's highlights on that mirror (along the lid for a
+// meniscus). Ordered as the views list their distractors.
+using HighlightKey = std::tuple<int, DistractorKind, int, int>;
 
 // `result`'s distractors with their labels (its camera's views in order,
-// as image_distractors lists them).
-std::vector<Highlight> highlights_of(const RenderResult& result) {
-  std::vector<Highlight> out;
+// as image_distractors lists them) and keys.
+std::vector<std::pair<HighlightKey, Highlight>> highlights_of(const RenderResult& result) {
+  std::vector<std::pair<HighlightKey, Highlight>> out;
+  std::map<std::tuple<int, DistractorKind, int>, int> count;
   std::size_t next = 0;
   for (const EyeInCameraTruth& view : result.truth.views) {
     if (view.camera != result.camera) continue;
-    for (const DistractorTruth& d : view.distractors) out.push_back({d, result.distractors.at(next++), 0});
+    for (const DistractorTruth& d : view.distractors) {
+      const int ordinal = count[{view.eye, d.kind, d.illuminator}]++;
+      out.push_back({{view.eye, d.kind, d.illuminator, ordinal}, {d, result.distractors.at(next++), 0}});
+    }
   }
   return out;
 }
@@ -636,11 +687,11 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     std::vector<double> sum;
     std::vector<std::vector<double>> glint_sums;  // per "glint" and "glint.<light>" AOV, in order
     std::vector<double> glint_electrons;           // per glint image, over the exposure
-    // A distractor's, by eye and light: one may come and go as the eye
+    // A distractor's, by HighlightKey: one may come and go as the eye
     // turns. One missing at mid-exposure is labelled as at the instant
     // nearest it where it exists.
-    std::map<std::pair<int, int>, double> distractor_electrons;
-    std::map<std::pair<int, int>, Highlight> nearest_highlight;
+    std::map<HighlightKey, double> distractor_electrons;
+    std::map<HighlightKey, Highlight> nearest_highlight;
     RenderResult other;
     Scene moved = scene;
     for (int k = 0; k < frames; ++k) {
@@ -663,8 +714,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
           glint_electrons[i] += target.glints[i].electrons / frames;
         }
       }
-      for (Highlight& h : highlights_of(target)) {
-        const std::pair<int, int> key{h.image.eye, h.image.illuminator};
+      for (auto& [key, h] : highlights_of(target)) {
         if (h.image.electrons > 0 && std::isfinite(h.image.electrons)) distractor_electrons[key] += h.image.electrons / frames;
         h.from_middle = std::abs(k - middle);
         const auto found = nearest_highlight.find(key);
@@ -683,20 +733,17 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     // A glint's electrons are the whole exposure's (its label's place and
     // status stay the mid-exposure instant's).
     for (std::size_t i = 0; i < result.glints.size(); ++i) result.glints[i].electrons = glint_electrons[i];
-    for (auto& [key, h] : nearest_highlight) {
-      if (h.from_middle == 0) continue;  // the mid-exposure instant has it
-      for (EyeInCameraTruth& view : result.truth.views) {
-        if (view.camera == camera_index && view.eye == key.first) view.distractors.push_back(h.truth);
-      }
-    }
+    // Each view's distractors: the mid-exposure instant's, and as at the
+    // nearest instant those it has not; in key order, as each instant's.
     std::vector<GlintImage> images;
     for (EyeInCameraTruth& view : result.truth.views) {
       if (view.camera != camera_index) continue;
-      std::sort(view.distractors.begin(), view.distractors.end(),
-                [](const DistractorTruth& a, const DistractorTruth& b) { return a.illuminator < b.illuminator; });
-      for (const DistractorTruth& d : view.distractors) {
-        GlintImage image = nearest_highlight.at({view.eye, d.illuminator}).image;
-        image.electrons = distractor_electrons[{view.eye, d.illuminator}];
+      view.distractors.clear();
+      for (const auto& [key, h] : nearest_highlight) {
+        if (std::get<0>(key) != view.eye) continue;
+        view.distractors.push_back(h.truth);
+        GlintImage image = h.image;
+        image.electrons = distractor_electrons[key];
         images.push_back(image);
       }
     }

@@ -201,8 +201,9 @@ void add_face(SceneGeometry& geometry, const Scene& scene, int index, const Eye&
   add(geometry.surfaces, Surface::skin, index, head, std::move(floor));
 }
 
-void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_t eyeball_begin) {
-  SurfaceList& list = geometry.surfaces;
+}  // namespace
+
+HeadPlacement head_placement(const Scene& scene, int index) {
   const Eye& eye = scene.eyes[index];
   const EyeAppearance& look = eye.appearance();
   const Eyelids& lids = *look.eyelids;
@@ -210,9 +211,8 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
   const auto y = UnitVector3::try_normalize(look.head_up.vector() - z.vector() * dot(look.head_up, z));
   if (!y) fail_eye(index, eye.model(), "appearance head_up is parallel to head_forward");
   const UnitVector3 x = UnitVector3::normalize(cross(*y, z));
-  const Pose head_pose(Rotation::from_columns(x, *y, z), eye.rotation_center().from_origin());
-  const Pose head_from_world = head_pose.inverse();
-  const auto world_from_head = std::make_shared<const Frame>(head_pose);
+  HeadPlacement out{Pose(Rotation::from_columns(x, *y, z), eye.rotation_center().from_origin()), {}};
+  const Pose head_from_world = out.world_from_head.inverse();
 
   // The margins follow the eye's vertical rotation (Eyelids in appearance.h).
   for (const auto& [key, gain] : {std::pair{"upper_gain_upgaze", lids.upper_gain_upgaze},
@@ -224,8 +224,21 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
     }
   }
   const double elevation = surfaces::eye_elevation_rad(head_from_world * eye.optical_axis().vector());
-  const surfaces::MarginTurns turns = surfaces::margin_turns(
-      lids.upper_gain_upgaze, lids.upper_gain_downgaze, lids.lower_gain_upgaze, lids.lower_gain_downgaze, elevation);
+  out.turns = surfaces::margin_turns(lids.upper_gain_upgaze, lids.upper_gain_downgaze, lids.lower_gain_upgaze,
+                                     lids.lower_gain_downgaze, elevation);
+  return out;
+}
+
+namespace {
+
+void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_t eyeball_begin) {
+  SurfaceList& list = geometry.surfaces;
+  const Eye& eye = scene.eyes[index];
+  const EyeAppearance& look = eye.appearance();
+  const Eyelids& lids = *look.eyelids;
+  const HeadPlacement head = head_placement(scene, index);
+  const auto world_from_head = std::make_shared<const Frame>(head.world_from_head);
+  const surfaces::MarginTurns& turns = head.turns;
   if (look.face) {
     add_face(geometry, scene, index, eye, world_from_head, turns, eyeball_begin);
     return;
@@ -260,7 +273,7 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
   face.hole_radius_mm = std::sqrt(R_l * R_l - z_f * z_f);
   for (std::size_t j = 0; j < scene.eyes.size(); ++j) {
     if (static_cast<int>(j) == index) continue;
-    const Vector3 other = (head_from_world * scene.eyes[j].rotation_center()).from_origin();
+    const Vector3 other = (head.world_from_head.inverse() * scene.eyes[j].rotation_center()).from_origin();
     const double gap = other.norm();
     if (!(gap > 1e-9)) continue;  // the same place: nothing to split
     face.cuts.push_back({other / gap, 0.5 * gap + surfaces::kSeamOverlapMm});

@@ -328,6 +328,17 @@ class PlacedLashes {
 
 using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
 
+// Where an eye's lids (and face) are placed: the head frame (origin at the
+// centre of rotation, z along appearance.head_forward, y toward head_up)
+// and how far the margins turn with the eye's elevation. For an eye with
+// eyelids; throws as build_scene_geometry for parallel head axes or gains
+// out of [0, 2].
+struct HeadPlacement {
+  Pose world_from_head;
+  surfaces::MarginTurns turns;
+};
+HeadPlacement head_placement(const Scene& scene, int eye);
+
 // Every surface and mesh of a scene, placed. Throws std::invalid_argument
 // naming eyes[i] or meshes[i] for an eye whose surfaces cannot be built (a
 // cornea that does not reach its limbus, a sclera that cannot join it), lids

@@ -145,7 +145,7 @@ TEST(ImageLabels, ReadsAWetEyesDistractorsAndNamesABadOne) {
 
   nlohmann::json j = good;
   j["views"][0]["distractors"][1]["kind"] = "lens";
-  expect_error(j, "views[0].distractors[1].kind = \"lens\"", "must be \"sclera\"");
+  expect_error(j, "views[0].distractors[1].kind = \"lens\"", "must be \"sclera\" or \"tear_meniscus\"");
   j = good;
   j["views"][0]["distractors"][0]["illuminator"] = 8;
   expect_error(j, "views[0].distractors[0].illuminator = 8", "integer in [0, 7]");

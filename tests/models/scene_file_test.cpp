@@ -682,12 +682,16 @@ TEST(SceneFile, ReadsTheTissueTexturesAndWritesThemBackOnlyWhenOn) {
 }
 
 TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
-  const Scene scene = parse_scene(eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5 } })"), "s.json");
+  const Scene scene = parse_scene(
+      eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5, "meniscus_radius_mm": 0.25 } })"),
+      "s.json");
   ASSERT_TRUE(scene.eyes[0].appearance().tear_film);
   EXPECT_EQ(scene.eyes[0].appearance().tear_film->sclera_roughness_deg, 3.5);
+  EXPECT_EQ(scene.eyes[0].appearance().tear_film->meniscus_radius_mm, 0.25);
   const Scene back = parse_scene(scene_to_json(scene), "back.json");
   ASSERT_TRUE(back.eyes[0].appearance().tear_film);
   EXPECT_EQ(back.eyes[0].appearance().tear_film->sclera_roughness_deg, 3.5);
+  EXPECT_EQ(back.eyes[0].appearance().tear_film->meniscus_radius_mm, 0.25);
   // {} is every default; without it, a dry sclera, and none written.
   EXPECT_EQ(parse_scene(eye_with(R"("appearance": { "tear_film": {} })"), "s.json").eyes[0].appearance().tear_film->sclera_roughness_deg,
             TearFilm{}.sclera_roughness_deg);
@@ -699,6 +703,8 @@ TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
       {R"({ "sclera_roughness_deg": 11 })", "eyes[0].appearance.tear_film.sclera_roughness_deg = 11: must be between 0 and 10"},
       {R"({ "sclera_roughness_deg": -1 })", "eyes[0].appearance.tear_film.sclera_roughness_deg = -1: must be between 0 and 10"},
       {R"({ "meniscus": 1 })", "eyes[0].appearance.tear_film.meniscus = 1: unknown key"},
+      {R"({ "meniscus_radius_mm": 1.5 })", "eyes[0].appearance.tear_film.meniscus_radius_mm = 1.5: must be between 0 and 1"},
+      {R"({ "meniscus_radius_mm": -0.1 })", "eyes[0].appearance.tear_film.meniscus_radius_mm = -0.1: must be between 0 and 1"},
       {R"(2)", "eyes[0].appearance.tear_film = 2: must be an object"},
   };
   for (const auto& [film, expected] : bad) {

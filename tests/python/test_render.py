@@ -224,6 +224,21 @@ def test_a_wet_scleras_highlights_are_labelled_and_imaged():
     assert "distractor" not in dry.aov_names
 
 
+def test_a_wet_faces_tear_meniscus_highlights_are_labelled_and_imaged():
+    d = purkinje.load_scene(SOURCE_DIR / "assets/scenes/hard/headset_face.json").to_dict()
+    d["eyes"][0]["appearance"]["tear_film"] = {}
+    result = purkinje.render(purkinje.parse_scene(d), noise=False)
+    labels = result.labels.views[0].distractors
+    seen = [x for x in labels if x.kind == "tear_meniscus" and x.status == "ok"]
+    assert len(seen) >= 2
+    share = float((result.aov("distractor") * result.electrons).sum())
+    assert share == pytest.approx(sum(x["electrons"] for x in result.distractors), rel=1e-4)
+    # Without a meniscus, the sclera's highlights alone.
+    d["eyes"][0]["appearance"]["tear_film"] = {"meniscus_radius_mm": 0}
+    flat = purkinje.render(purkinje.parse_scene(d), noise=False)
+    assert all(x.kind == "sclera" for x in flat.labels.views[0].distractors)
+
+
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():
     import subprocess
     import sys

@@ -184,6 +184,13 @@ inline constexpr std::array<FaceKey, 7> kFaceKeys{{
 // highlights in eye-tracker images are larger and softer than glints.
 struct TearFilm {
   double sclera_roughness_deg = 2.0;
+  // The lower lid's tear meniscus: the concave strip of tears between the
+  // lid margin and the globe, a fillet of this radius (0: none). Healthy
+  // adults' lower menisci measure 0.31-0.37 mm in radius (Yokoi et al.
+  // 1999, Br J Ophthalmol 83:92; UHR-OCT, Biomed Opt Express 10:2744,
+  // 2019), dry eyes about 0.25 mm. Rendered for eyes with a face only,
+  // as its highlights (docs/rendering.md: tear meniscus).
+  double meniscus_radius_mm = 0.3;
 };
 // The tear film's refractive index in the near infrared, for its Fresnel
 // reflectance: tears measure 1.3370 at 589 nm (Craig, Simmons, Patel and

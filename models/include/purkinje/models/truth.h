@@ -38,7 +38,9 @@ struct GlintTruth {
 // other than the cornea, which a glint detector may take for a glint.
 // Labels list them so that such false positives can be scored.
 enum class DistractorKind {
-  sclera,  // the tear film over the sclera (EyeAppearance::tear_film)
+  sclera,         // the tear film over the sclera (EyeAppearance::tear_film)
+  tear_meniscus,  // the lower lid's tear meniscus (TearFilm::meniscus_radius_mm);
+                  // found by the renderer, which builds the lid margins
 };
 const char* to_string(DistractorKind kind);
 
@@ -129,6 +131,14 @@ struct TruthOptions {
 };
 
 SceneTruth compute_truth(const Scene& scene, const TruthOptions& options = {});
+
+// The label of a highlight (status ok) that `eye`'s `kind` of mirror
+// forms of `light` toward `camera`: its pixel and status (ok,
+// outside_image, behind_camera, or occluded: the cornea standing out of
+// the globe, then `options.occluded`, on the way to the camera first and
+// then to the light).
+DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
+                                 const Eye& eye, int light, const Camera& camera, const TruthOptions& options);
 
 // Image of a point inside the eye seen through the cornea by `camera`.
 struct RefractedImage {

@@ -1,0 +1,387 @@
+#include "tear_meniscus.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <utility>
+
+#include "face_mesh.h"
+#include "mirror_radiometry.h"
+#include "scene_geometry.h"
+
+namespace purkinje::renderer {
+namespace {
+
+// The margin's slope by a central difference: T needs only the slope (its
+// curvature scales c' without turning it, see frame()), so the solve sees
+// rounding of about 1e-16 * |m| / kSlopeStep.
+constexpr double kSlopeStepMm = 1e-3;
+// The curvature (|c'| only): a wider step, as rounding grows with the order.
+constexpr double kCurvatureStepMm = 1e-2;
+// The fillet's centres are found this far apart along x.
+constexpr double kNodeStepMm = 0.1;
+// Sign changes of the bisector's part along the meniscus are looked for at
+// this spacing: two highlights closer than this (a fold, where they are
+// about to merge and vanish) may be missed.
+constexpr double kScanStepMm = 0.05;
+// The meniscus ends this far along the fissure toward each canthus.
+constexpr double kFissureReach = 0.9;
+
+Vector3 unit(const Vector3& v) { return v / v.norm(); }
+
+// The height Z above the head's xy plane where a sphere of radius r about
+// (X, Y, Z) touches the shell from outside, by sphere tracing down from
+// far in front: each step is the gap, which the shell's distance (1-Lipschitz)
+// cannot overshoot. nullopt when the line passes the shell at more than r.
+std::optional<double> touching_height(const ShellOffset& shell, double X, double Y, double r) {
+  double Z = 100.0;
+  for (int i = 0; i < 2000; ++i) {
+    const double gap = shell(Point3{X, Y, Z}).norm() - r;
+    if (!(gap > 1e-14)) return gap > -1e-9 ? std::optional<double>(Z) : std::nullopt;
+    Z -= gap;
+    if (Z < -100.0) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+struct TearMeniscus::Frame {
+  bool valid = false;
+  Point3 c;                               // the circle's centre
+  UnitVector3 T = UnitVector3::unit_x();  // c' / |c'|
+  UnitVector3 U = UnitVector3::unit_y();  // the wall's normal n: N where the fillet touches the wall
+  UnitVector3 V = UnitVector3::unit_z();  // T x U
+  double theta_globe = 0;  // the angle of N where it touches the shell, from U toward V
+};
+
+std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_head, double radius_mm,
+                                                std::function<double(double)> margin_mm, const ShellOffset& shell,
+                                                double x_lo, double x_hi) {
+  TearMeniscus out;
+  out.eye_ = eye;
+  out.world_from_head_ = world_from_head;
+  out.head_from_world_ = world_from_head.inverse();
+  out.r_ = radius_mm;
+  out.margin_ = std::move(margin_mm);
+  const double r = radius_mm;
+  const int count = std::max(2, static_cast<int>(std::ceil((x_hi - x_lo) / kNodeStepMm)) + 1);
+  const double step = (x_hi - x_lo) / (count - 1);
+  std::vector<std::optional<double>> z(count);
+  std::vector<Vector3> to_centre(count, Vector3{0, 0, 0});
+  for (int i = 0; i < count; ++i) {
+    const double x = x_lo + i * step;
+    const double m = out.margin_(x);
+    const double m1 = (out.margin_(x + kSlopeStepMm) - out.margin_(x - kSlopeStepMm)) / (2 * kSlopeStepMm);
+    const double w = std::sqrt(1 + m1 * m1);
+    const double X = x - r * m1 / w, Y = m + r / w;
+    z[i] = touching_height(shell, X, Y, r);
+    if (z[i]) to_centre[i] = unit(shell(Point3{X, Y, *z[i]}));
+  }
+  // The run of nodes about the fissure's middle (x = 0) where the fillet
+  // exists.
+  int middle = static_cast<int>(std::lround(std::clamp(-x_lo / step, 0.0, count - 1.0)));
+  if (!z[middle]) return std::nullopt;
+  int first = middle, last = middle;
+  while (first > 0 && z[first - 1]) --first;
+  while (last + 1 < count && z[last + 1]) ++last;
+  if (last - first < 3) return std::nullopt;
+  out.x0_ = x_lo + first * step;
+  out.step_ = step;
+  for (int i = first; i <= last; ++i) {
+    out.z_.push_back(*z[i]);
+    out.to_centre_.push_back(to_centre[i]);
+  }
+  // A natural cubic spline's second derivatives (Thomas's algorithm).
+  const int n = static_cast<int>(out.z_.size());
+  out.z2_.assign(n, 0.0);
+  std::vector<double> diagonal(n, 4.0), rhs(n, 0.0);
+  for (int i = 1; i + 1 < n; ++i) rhs[i] = 6 * (out.z_[i + 1] - 2 * out.z_[i] + out.z_[i - 1]) / (step * step);
+  for (int i = 2; i + 1 < n; ++i) {
+    const double f = 1 / diagonal[i - 1];
+    diagonal[i] -= f;
+    rhs[i] -= f * rhs[i - 1];
+  }
+  for (int i = n - 2; i >= 1; --i) out.z2_[i] = (rhs[i] - (i + 1 < n - 1 ? out.z2_[i + 1] : 0.0)) / diagonal[i];
+  return out;
+}
+
+TearMeniscus::Frame TearMeniscus::frame(double x) const {
+  Frame f;
+  const int n = static_cast<int>(z_.size());
+  const double at = (x - x0_) / step_;
+  if (!(at >= 0 && at <= n - 1)) return f;
+  const double m = margin_(x);
+  const double h = kSlopeStepMm, k = kCurvatureStepMm;
+  const double m1 = (margin_(x + h) - margin_(x - h)) / (2 * h);
+  const double m2 = (margin_(x + k) - 2 * m + margin_(x - k)) / (k * k);
+  const double w = std::sqrt(1 + m1 * m1);
+  const double nx = -m1 / w, ny = 1 / w;  // the wall's normal, into the opening (+y)
+  // The spline on [x_i, x_i+1].
+  const int i = std::min(static_cast<int>(at), n - 2);
+  const double t = x - (x0_ + i * step_), u = step_ - t;
+  const double a = z_[i] / step_ - z2_[i] * step_ / 6, b = z_[i + 1] / step_ - z2_[i + 1] * step_ / 6;
+  const double Z = (z2_[i] * u * u * u + z2_[i + 1] * t * t * t) / (6 * step_) + a * u + b * t;
+  const double dZ = (z2_[i + 1] * t * t - z2_[i] * u * u) / (2 * step_) + b - a;
+  if (!std::isfinite(m) || !std::isfinite(Z)) return f;
+  f.c = Point3{x + r_ * nx, m + r_ * ny, Z};
+  // c' = ((1 - r m'' / w^3) (1, m'), Z'): the wall's normal turns along
+  // the wall, and stays perpendicular to c'.
+  const double scale = 1 - r_ * m2 / (w * w * w);
+  if (!(scale > 0)) return f;  // the wall curves tighter than r: no fillet
+  f.T = UnitVector3::normalize(Vector3{scale, scale * m1, dZ});
+  f.U = UnitVector3::normalize(Vector3{nx, ny, 0});
+  f.V = UnitVector3::normalize(cross(f.T, f.U));
+  // Where it touches the shell: the nodes' directions, interpolated.
+  const double s = t / step_;
+  const Vector3 g = to_centre_[i] * (1 - s) + to_centre_[i + 1] * s;
+  f.theta_globe = std::atan2(dot(g, f.V), dot(g, f.U));
+  f.valid = true;
+  return f;
+}
+
+double TearMeniscus::theta_at(const Frame& f, const Point3& source, const Point3& target, double& along) const {
+  double theta = 0.5 * f.theta_globe;
+  Vector3 bisector{0, 0, 0};
+  for (int i = 0; i < 100; ++i) {
+    const Vector3 n = f.U.vector() * std::cos(theta) + f.V.vector() * std::sin(theta);
+    const Point3 p = f.c - n * r_;
+    bisector = unit(source - p) + unit(target - p);
+    const double next = std::atan2(dot(bisector, f.V), dot(bisector, f.U));
+    const bool done = std::abs(next - theta) <= 1e-15;
+    theta = next;
+    if (done) break;
+  }
+  along = dot(unit(bisector), f.T);
+  return theta;
+}
+
+Reflection TearMeniscus::highlight_at(double x, const Point3& source, const Point3& target) const {
+  Reflection r;
+  const Frame f = frame(x);
+  if (!f.valid) return r;
+  double along = 0;
+  const double theta = theta_at(f, source, target, along);
+  // On the arc between the wall and the globe.
+  const double lo = std::min(0.0, f.theta_globe), hi = std::max(0.0, f.theta_globe);
+  if (!(theta > lo && theta < hi)) return r;
+  const UnitVector3 n = UnitVector3::normalize(f.U.vector() * std::cos(theta) + f.V.vector() * std::sin(theta));
+  const Point3 p = f.c - n.vector() * r_;
+  r.status = PathStatus::ok;
+  r.point = world_from_head_ * p;
+  r.normal = world_from_head_ * n;
+  r.incident = world_from_head_ * UnitVector3::normalize(p - source);
+  r.reflected = world_from_head_ * UnitVector3::normalize(target - p);
+  r.incidence_rad = std::acos(std::clamp(dot(n, UnitVector3::normalize(target - p)), -1.0, 1.0));
+  r.on_cap = false;
+  return r;
+}
+
+// The root of the bisector's part along the meniscus in [a, b], where it
+// changes sign (fa at a), by regula falsi with the Illinois rule.
+Reflection TearMeniscus::refine(double a, double b, double fa, const Point3& source,
+                                       const Point3& target) const {
+  double along = 0;
+  const auto F = [&](double x) {
+    const Frame f = frame(x);
+    theta_at(f, source, target, along);
+    return along;
+  };
+  double fb = F(b);
+  int side = 0;
+  for (int i = 0; i < 200 && b - a > 1e-12; ++i) {
+    double x = (a * fb - b * fa) / (fb - fa);
+    if (!(x > a && x < b)) x = 0.5 * (a + b);
+    const double fx = F(x);
+    if (fx == 0) {
+      a = b = x;
+      break;
+    }
+    if ((fx > 0) == (fb > 0)) {
+      b = x;
+      fb = fx;
+      if (side == -1) fa *= 0.5;
+      side = -1;
+    } else {
+      a = x;
+      fa = fx;
+      if (side == 1) fb *= 0.5;
+      side = 1;
+    }
+  }
+  return highlight_at(0.5 * (a + b), source, target);
+}
+
+std::vector<Reflection> TearMeniscus::highlights(const Point3& source_world, const Point3& target_world) const {
+  const Point3 source = head_from_world_ * source_world, target = head_from_world_ * target_world;
+  std::vector<Reflection> out;
+  const double lo = x0_, hi = x0_ + (static_cast<double>(z_.size()) - 1) * step_;
+  const int steps = std::max(1, static_cast<int>(std::ceil((hi - lo) / kScanStepMm)));
+  double previous_x = 0, previous_f = 0;
+  bool previous_valid = false;
+  for (int i = 0; i <= steps; ++i) {
+    const double x = lo + (hi - lo) * i / steps;
+    const Frame f = frame(x);
+    double along = 0;
+    if (f.valid) theta_at(f, source, target, along);
+    const bool valid = f.valid && std::isfinite(along);
+    if (valid && previous_valid && (along == 0 || (along > 0) != (previous_f > 0))) {
+      Reflection h = along == 0 ? highlight_at(x, source, target)
+                                       : refine(previous_x, x, previous_f, source, target);
+      if (h.status == PathStatus::ok) out.push_back(h);
+    }
+    previous_x = x;
+    previous_f = along;
+    previous_valid = valid;
+  }
+  return out;
+}
+
+Reflection TearMeniscus::highlight_near(const Point3& near, const Point3& source_world,
+                                        const Point3& target_world) const {
+  const Point3 source = head_from_world_ * source_world, target = head_from_world_ * target_world;
+  // The pipe's parameter is the wall point's x, within r of the point's.
+  const double x0 = (head_from_world_ * near).x;
+  double along = 0;
+  const auto F = [&](double x) -> std::optional<double> {
+    if (x < x0_ || x > x0_ + (static_cast<double>(z_.size()) - 1) * step_) return std::nullopt;
+    const Frame f = frame(x);
+    if (!f.valid) return std::nullopt;
+    theta_at(f, source, target, along);
+    return along;
+  };
+  const std::optional<double> f0 = F(x0);
+  if (!f0) return {};
+  if (*f0 == 0) return highlight_at(x0, source, target);
+  // Widening brackets about x0: the nearest sign change.
+  for (double d = 1e-3; d <= 0.5; d *= 2) {
+    for (const double x : {x0 - d, x0 + d}) {
+      const std::optional<double> f = F(x);
+      if (!f || (*f > 0) == (*f0 > 0)) continue;
+      return x < x0 ? refine(x, x0, *f, source, target) : refine(x0, x, *f0, source, target);
+    }
+  }
+  return {};
+}
+
+GlintRadiometry meniscus_highlight_radiometry(const TearMeniscus& meniscus, const Illuminator& light,
+                                              const Camera& camera, const Reflection& highlight) {
+  check_radiometry_inputs(light, camera);
+  if (highlight.status != PathStatus::ok) return failed_radiometry(highlight.status);
+  const Mirror mirror = [&](const Point3& source, const Point3& target) {
+    return meniscus.highlight_near(highlight.point, source, target);
+  };
+  // The highlight as the meniscus itself finds it: a label from elsewhere
+  // (or another meniscus) has no radiometry here.
+  const Reflection again = mirror(light.position, camera.center());
+  if (again.status != PathStatus::ok || distance(again.point, highlight.point) > 1e-9) {
+    return failed_radiometry(PathStatus::not_converged);
+  }
+  return mirror_radiometry(mirror, kTearFilmIndex, light, camera, highlight);
+}
+
+ShellOffset eye_shell_offset(const Eye& eye, const Pose& world_from_head) {
+  const EyeModel& m = eye.model();
+  // The shell is a surface of revolution about the optical axis: in the
+  // meridian plane through a point, at distance rho from the axis and
+  // depth w below the apex, it is the cap's conic rho^2 = 2 R w - k w^2
+  // down to the limbus (w_L, r_L), the limbal band (rho = r_L down to the
+  // seam) or the annulus in the limbus plane (out to the sphere), and the
+  // sclera's circle (centre on the axis at the centre of rotation's depth)
+  // behind the seam.
+  const double R = m.anterior_cornea.radius_mm, k = 1 + m.anterior_cornea.asphericity;
+  const double w_L = m.limbus_depth_mm(), r_L = m.limbus_radius_mm, seam = m.sclera_seam_depth_mm();
+  const double R_s = m.sclera_radius_mm, w_c = m.rotation_center_depth_mm;
+  const double seam_rho = std::sqrt(std::max(0.0, R_s * R_s - (w_c - seam) * (w_c - seam)));
+  const Pose eye_from_head = eye.eye_from_world() * world_from_head;
+  const Pose head_from_eye = eye_from_head.inverse();
+  return [=](const Point3& head_point) {
+    const Point3 p = eye_from_head * head_point;  // eye frame: apex at z = R on the z axis
+    const double rho = std::hypot(p.x, p.y), w = R - p.z;
+    double best = std::numeric_limits<double>::infinity(), foot_rho = 0, foot_w = 0;
+    const auto consider = [&](double fr, double fw) {
+      const double d = (rho - fr) * (rho - fr) + (w - fw) * (w - fw);
+      if (d < best) {
+        best = d;
+        foot_rho = fr;
+        foot_w = fw;
+      }
+    };
+    // The cap, by golden-section search over its radius (the squared
+    // distance is unimodal from outside a convex arc).
+    const auto depth = [&](double q) { return q * q / (R + std::sqrt(R * R - k * q * q)); };
+    const auto cap = [&](double q) { return (rho - q) * (rho - q) + (w - depth(q)) * (w - depth(q)); };
+    double a = 0, b = r_L;
+    const double g = 0.5 * (std::sqrt(5.0) - 1);
+    double c = b - g * (b - a), d = a + g * (b - a), fc = cap(c), fd = cap(d);
+    for (int i = 0; i < 80; ++i) {
+      if (fc < fd) {
+        b = d;
+        d = c;
+        fd = fc;
+        c = b - g * (b - a);
+        fc = cap(c);
+      } else {
+        a = c;
+        c = d;
+        fc = fd;
+        d = a + g * (b - a);
+        fd = cap(d);
+      }
+    }
+    const double q = 0.5 * (a + b);
+    consider(q, depth(q));
+    if (seam > w_L) {
+      consider(r_L, std::clamp(w, w_L, seam));  // the band
+    } else {
+      consider(std::clamp(rho, std::min(r_L, seam_rho), std::max(r_L, seam_rho)), w_L);  // the annulus
+    }
+    // The sphere behind the seam, or the seam's circle.
+    const double dr = rho, dw = w - w_c, len = std::hypot(dr, dw);
+    if (len > 0 && w_c + R_s * dw / len >= seam) {
+      consider(R_s * dr / len, w_c + R_s * dw / len);
+    } else {
+      consider(seam_rho, seam);
+    }
+    const double cos_phi = rho > 0 ? p.x / rho : 1.0, sin_phi = rho > 0 ? p.y / rho : 0.0;
+    const Point3 foot{foot_rho * cos_phi, foot_rho * sin_phi, R - foot_w};
+    return head_from_eye * (p - foot);
+  };
+}
+
+std::vector<TearMeniscus> build_tear_menisci(const Scene& scene) {
+  std::vector<TearMeniscus> out;
+  for (int i = 0; i < static_cast<int>(scene.eyes.size()); ++i) {
+    const Eye& eye = scene.eyes[i];
+    const EyeAppearance& look = eye.appearance();
+    if (!look.face || !look.eyelids || !look.tear_film || !(look.tear_film->meniscus_radius_mm > 0)) continue;
+    const double R = eye.model().sclera_radius_mm, r = look.tear_film->meniscus_radius_mm;
+    const HeadPlacement head = head_placement(scene, i);
+    // Copies: the meniscus may outlive this scene's eye.
+    const auto margins = [lids = *look.eyelids, face = *look.face, R, turns = head.turns](double x) {
+      return fissure_margins(lids, face, R, turns, x);
+    };
+    // Along the fissure, where the margins stand apart by more than the
+    // meniscus's width: the run about the middle.
+    const Face& face = *look.face;
+    const double nasal = face.side == EyeSide::right ? 1.0 : -1.0;
+    const double a = -nasal * kFissureReach * face.lateral_canthus_mm;
+    const double b = nasal * kFissureReach * look.eyelids->half_width_mm;
+    const auto open = [&](double x) {
+      const FissureMargins m = margins(x);
+      return m.upper_mm - m.lower_mm > 2 * r;
+    };
+    if (!open(0)) continue;
+    double x_lo = 0, x_hi = 0;
+    while (x_lo - kScanStepMm >= std::min(a, b) && open(x_lo - kScanStepMm)) x_lo -= kScanStepMm;
+    while (x_hi + kScanStepMm <= std::max(a, b) && open(x_hi + kScanStepMm)) x_hi += kScanStepMm;
+    std::optional<TearMeniscus> meniscus =
+        TearMeniscus::build(i, head.world_from_head, r, [margins](double x) { return margins(x).lower_mm; },
+                            eye_shell_offset(eye, head.world_from_head), x_lo, x_hi);
+    if (meniscus) out.push_back(std::move(*meniscus));
+  }
+  return out;
+}
+
+}  // namespace purkinje::renderer

@@ -1,0 +1,261 @@
+// The lower lid's tear meniscus: its highlights on a straight margin (a
+// torus: the fillet's centres run on a circle about the head's vertical
+// axis) against the law of reflection on the fillet's circle solved by
+// hand, its power against Coddington's equations, and in rendered images
+// where the labels put them with the electrons they give.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "mirror_radiometry.h"
+#include "purkinje/models/scene_file.h"
+#include "purkinje/models/truth.h"
+#include "purkinje/renderer/render.h"
+#include "tear_meniscus.h"
+
+namespace purkinje::renderer {
+namespace {
+
+constexpr double kGlobe = 12.0, kRadius = 0.3, kMargin = -6.0;
+
+// Head frame = world; the margin at y = -6 along the whole lid, on a
+// globe that is a sphere of radius 12 about the origin.
+TearMeniscus straight_meniscus() {
+  const ShellOffset sphere = [](const Point3& p) {
+    const Vector3 v = p.from_origin();
+    return v - v * (kGlobe / v.norm());
+  };
+  return TearMeniscus::build(0, Pose(), kRadius, [](double) { return kMargin; }, sphere, -8, 8).value();
+}
+
+// The fillet's circle in the plane x = 0: centre r above the wall and
+// r out of the globe.
+Point3 circle_centre() {
+  const double y = kMargin + kRadius;
+  return {0, y, std::sqrt((kGlobe + kRadius) * (kGlobe + kRadius) - y * y)};
+}
+
+// The point on the circle (in the plane x = 0) that mirrors `source` to
+// `target` (both in that plane), by bisection on the angle between the
+// normal and the two directions, from the wall's contact toward the globe's.
+Point3 mirror_point_by_hand(const Point3& source, const Point3& target) {
+  const Point3 c = circle_centre();
+  const double wall = std::atan2(1.0, 0.0);  // N = +y at the wall, as the angle of N in the (z, y) plane
+  const Vector3 g = c.from_origin() / c.from_origin().norm();
+  const double globe = std::atan2(g.y, g.z);
+  const auto point = [&](double a) {
+    const Vector3 n{0, std::sin(a), std::cos(a)};
+    return std::pair{c - n * kRadius, n};
+  };
+  const auto imbalance = [&](double a) {
+    const auto [p, n] = point(a);
+    const Vector3 s = (source - p) / (source - p).norm(), t = (target - p) / (target - p).norm();
+    // Positive when the normal leans toward the target.
+    return std::acos(dot(n, s)) - std::acos(dot(n, t));
+  };
+  double lo = globe, hi = wall;
+  const double f_lo = imbalance(lo);
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if ((imbalance(mid) > 0) == (f_lo > 0)) lo = mid; else hi = mid;
+  }
+  return point(0.5 * (lo + hi)).first;
+}
+
+TEST(TearMeniscus, MirrorsTheLightWhereTheLawOfReflectionHoldsOnTheFillet) {
+  const TearMeniscus meniscus = straight_meniscus();
+  // Light and camera in the plane x = 0, in front and below (as a
+  // headset's) or level (as a remote tracker's): the highlight lies where
+  // the margin crosses that plane, by symmetry.
+  for (const auto& [source, target] : {std::pair{Point3{0, -20, 40}, Point3{0, -12, 45}},
+                                       std::pair{Point3{0, -300, 600}, Point3{0, -150, 600}},
+                                       std::pair{Point3{0, -30, 20}, Point3{0, 5, 40}}}) {
+    const std::vector<Reflection> found = meniscus.highlights(source, target);
+    ASSERT_EQ(found.size(), 1u) << source.z;
+    const Reflection& r = found[0];
+    EXPECT_EQ(r.status, PathStatus::ok);
+    EXPECT_NEAR(r.point.x, 0, 1e-10);
+    const Point3 expected = mirror_point_by_hand(source, target);
+    EXPECT_LT(distance(r.point, expected), 1e-9) << source.z;
+    // On the circle, its normal toward the centre.
+    EXPECT_NEAR(distance(r.point, circle_centre()), kRadius, 1e-12);
+    EXPECT_LT(distance(r.point + r.normal.vector() * kRadius, circle_centre()), 1e-12);
+    // The directions and the incidence as labelled.
+    EXPECT_LT((r.incident.vector() - (r.point - source) / (r.point - source).norm()).norm(), 1e-12);
+    EXPECT_NEAR(std::cos(r.incidence_rad), dot(r.normal, r.reflected), 1e-12);
+    EXPECT_NEAR(dot(r.normal, -r.incident.vector()), dot(r.normal, r.reflected), 1e-12);
+    // Found again from nearby.
+    const Reflection again = meniscus.highlight_near(r.point + Vector3{0.2, 0, 0}, source, target);
+    EXPECT_LT(distance(again.point, r.point), 1e-10);
+  }
+}
+
+TEST(TearMeniscus, HasNoHighlightWhereTheBisectorLeavesTheFilletsArc) {
+  const TearMeniscus meniscus = straight_meniscus();
+  // From above and behind the wall's normal (+y): the bisector points
+  // up past the wall's contact; from straight below, past the globe's.
+  EXPECT_TRUE(meniscus.highlights({0, 40, 5}, {0, 60, 10}).empty());
+  EXPECT_TRUE(meniscus.highlights({0, -60, -5}, {0, -50, -2}).empty());
+}
+
+TEST(TearMeniscus, ItsHighlightsPowerIsCoddingtonsForTheTorus) {
+  const TearMeniscus meniscus = straight_meniscus();
+  const Illuminator led{"led", {0, -20, 40}, 0.3, 850, 0};
+  const Point3 centre{0, -12, 45};
+  const Reflection first = meniscus.highlights(led.position, centre).at(0);
+  // A camera aimed at the highlight: its aperture faces the reflected ray.
+  Sensor sensor;
+  sensor.pixel_pitch_mm = 0.006;
+  const Camera camera("cam", Intrinsics::from_focal_length(16, 0.006, 640, 480), {},
+                      camera_looking_at(centre, first.point, {0, -1, 0}), sensor);
+  const std::vector<Reflection> found = meniscus.highlights(led.position, camera.center());
+  ASSERT_EQ(found.size(), 1u);
+  const Reflection& r = found[0];
+  const GlintRadiometry g = meniscus_highlight_radiometry(meniscus, led, camera, r);
+  ASSERT_EQ(g.status, PathStatus::ok);
+
+  // Coddington: the reflected beam's focal lines lie a_t and a_s behind
+  // the mirror, 1/a = 1/d_s + 2 k_t / cos i in the plane of incidence
+  // (here the fillet's circle, k_t = -1/r: concave) and 1/d_s + 2 k_s cos i
+  // across it (along the lid: the torus's parallel, k_s = (N . e) / D, e
+  // the unit vector from the axis to the point, D its distance). The
+  // solid angle at the LED per unit aperture area is then
+  // 1 / (d_s^2 |1 + d_c / a_t| |1 + d_c / a_s|).
+  const double cos_i = std::cos(r.incidence_rad);
+  const double d_s = distance(led.position, r.point), d_c = distance(camera.center(), r.point);
+  const double D = std::hypot(r.point.x, r.point.z);
+  const Vector3 e{r.point.x / D, 0, r.point.z / D};
+  const double k_t = -1 / kRadius, k_s = dot(r.normal.vector(), e) / D;
+  const double tangential = 1 + d_c * (1 / d_s + 2 * k_t / cos_i);
+  const double sagittal = 1 + d_c * (1 / d_s + 2 * k_s * cos_i);
+  const double omega_per_area = 1 / (d_s * d_s * std::abs(tangential * sagittal));
+  const double aperture = camera.focal_length_mm() / camera.sensor().f_number;
+  const double expected = led.radiant_intensity_w_sr * fresnel_reflectance(cos_i, 1.0, kTearFilmIndex) *
+                          omega_per_area * 0.25 * std::numbers::pi * aperture * aperture;
+  // The meniscus is the pipe about a spline through the fillet's centres
+  // 0.1 mm apart: its curvature along the lid is the torus's to about 1e-5.
+  EXPECT_NEAR(g.power_w / expected, 1, 1e-4);
+  EXPECT_NEAR(g.fresnel, fresnel_reflectance(cos_i, 1.0, kTearFilmIndex), 1e-15);
+}
+
+// The headset face with a wet eye, its lower lid lowered off the cornea
+// (the meniscus lies on the globe's sphere) and every albedo 0: only
+// glints and highlights light the image; no lashes.
+Scene wet_dark_face() {
+  Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_face.json");
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.iris_albedo = look.sclera_albedo = look.skin_albedo = look.fundus_reflectance = 0;
+  look.tear_film = TearFilm{};
+  look.eyelids->lower_margin_mm = -7.5;
+  look.face->lashes.reset();
+  scene.eyes[0].set_appearance(look);
+  return scene;
+}
+
+TEST(TearMeniscusHighlights, LieWhereTheLabelsSayWithTheirElectrons) {
+  const Scene scene = wet_dark_face();
+  RenderOptions options;
+  options.noise = false;
+  const RenderResult result = render(scene, 0, options);
+  const std::vector<DistractorTruth>& truth = result.truth.views[0].distractors;
+  ASSERT_EQ(truth.size(), result.distractors.size());
+  const ImagePlane* mask = nullptr;
+  for (const NamedPlane& p : result.aovs) {
+    if (p.name == "distractor") mask = &p.plane;
+  }
+  ASSERT_NE(mask, nullptr);
+  const ImagePlane& e = result.electrons;
+
+  // Every highlight's light in the image is what its label gives.
+  double labelled = 0, imaged = 0;
+  int seen = 0;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    labelled += result.distractors[k].electrons;
+    if (truth[k].kind == DistractorKind::tear_meniscus && truth[k].status == PathStatus::ok) ++seen;
+  }
+  for (std::size_t i = 0; i < e.values.size(); ++i) imaged += double(mask->values[i]) * e.values[i];
+  ASSERT_GE(seen, 2);
+  EXPECT_NEAR(imaged / labelled, 1, 1e-4);
+
+  // Each seen meniscus highlight's centroid (its mask's light within 4 px,
+  // the point spread's reach) is its label's pixel; those alone there.
+  int alone = 0;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const DistractorTruth& d = truth[k];
+    if (d.kind != DistractorKind::tear_meniscus || d.status != PathStatus::ok) continue;
+    bool crowded = false;
+    for (std::size_t j = 0; j < truth.size(); ++j) {
+      crowded |= j != k && truth[j].status == PathStatus::ok &&
+                 std::hypot(truth[j].pixel.u - d.pixel.u, truth[j].pixel.v - d.pixel.v) < 10;
+    }
+    if (crowded) continue;
+    ++alone;
+    double sum = 0, su = 0, sv = 0;
+    for (int y = static_cast<int>(d.pixel.v) - 4; y <= static_cast<int>(d.pixel.v) + 4; ++y) {
+      for (int x = static_cast<int>(d.pixel.u) - 4; x <= static_cast<int>(d.pixel.u) + 4; ++x) {
+        const double w = double(mask->at(x, y)) * e.at(x, y);
+        sum += w;
+        su += w * x;  // pixel centres at integer coordinates
+        sv += w * y;
+      }
+    }
+    EXPECT_NEAR(sum / result.distractors[k].electrons, 1, 1e-3) << d.illuminator;
+    EXPECT_NEAR(su / sum, d.pixel.u, 0.02) << d.illuminator;
+    EXPECT_NEAR(sv / sum, d.pixel.v, 0.02) << d.illuminator;
+  }
+  EXPECT_GE(alone, 2);
+}
+
+TEST(TearMeniscus, TouchesTheCorneaWhereTheLidCrossesIt) {
+  // The headset face's lower margin lies over the cornea in the middle
+  // (5.5 mm below the centre, inside the limbus): the fillet's centres
+  // are r from the shell there, the cap's conicoid; the shell's distance
+  // checked against a march along the normal of the cornea's sphere.
+  Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_face.json");
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.tear_film = TearFilm{};
+  scene.eyes[0].set_appearance(look);
+  const std::vector<TearMeniscus> menisci = build_tear_menisci(scene);
+  ASSERT_EQ(menisci.size(), 1u);
+  const Eye& eye = scene.eyes[0];
+  const Camera& camera = scene.cameras[0];
+  int on_cornea = 0;
+  for (const Illuminator& led : scene.illuminators) {
+    for (const Reflection& r : menisci[0].highlights(led.position, camera.center())) {
+      // The fillet's centre and the keratometric cornea's sphere.
+      const Point3 centre = r.point + r.normal.vector() * kRadius;
+      const Vector3 out = centre - eye.cornea_center();
+      const double to_cornea = out.norm() - eye.model().anterior_cornea.radius_mm;
+      // Where it touches the cornea's sphere: inside the limbus by 0.2 mm,
+      // the cap is the nearest of the shell.
+      const Point3 touch = eye.eye_from_world() * (eye.cornea_center() + out * (eye.model().anterior_cornea.radius_mm / out.norm()));
+      if (std::hypot(touch.x, touch.y) < eye.model().limbus_radius_mm - 0.2) {
+        ++on_cornea;
+        EXPECT_NEAR(to_cornea, kRadius, 1e-6) << led.name;
+      }
+    }
+  }
+  EXPECT_GE(on_cornea, 3);
+}
+
+TEST(TearMeniscusHighlights, AreNoneWithoutAFaceOrWithARadiusOf0) {
+  Scene scene = wet_dark_face();
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.tear_film->meniscus_radius_mm = 0;
+  scene.eyes[0].set_appearance(look);
+  EXPECT_TRUE(build_tear_menisci(scene).empty());
+  look.tear_film->meniscus_radius_mm = 0.3;
+  scene.eyes[0].set_appearance(look);
+  EXPECT_EQ(build_tear_menisci(scene).size(), 1u);
+  // The headset with spherical lids and no face: no margin, no meniscus.
+  Scene plain = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_wet.json");
+  EXPECT_TRUE(build_tear_menisci(plain).empty());
+}
+
+}  // namespace
+}  // namespace purkinje::renderer

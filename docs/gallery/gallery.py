@@ -1,7 +1,7 @@
 """The gallery of docs/rendering.md: the bundled scenes, twelve images
 drawn across the face's and the lashes' parameters, three of what a
 real camera adds (JPEG and hot pixels, vignetting, a saccade), one of
-the skin's and sclera's textures and two of a wet sclera's highlights,
+the skin's and sclera's textures and two of wet eyes' highlights,
 each with its labels
 drawn over it (purkinje.figures.draw_labels). Rendered in the fast mode as
 `purkinje render` does by default (1 ray, 16 on edges, sensor noise).
@@ -98,8 +98,9 @@ def entries():
         ("remote_saccade", "remote with a face, a 900 deg/s saccade during the 4 ms exposure (3.6 deg): "
          "glints streak, the labels are mid-exposure's", saccade, 60),
     ]
-    # A wet sclera: its highlights (distractors, cyan squares) where the eye
-    # turns far enough that the sclera mirrors the LEDs.
+    # Wet eyes: the sclera's highlights (distractors, cyan squares) where the
+    # eye turns far enough that the sclera mirrors the LEDs, and the lower
+    # lid's tear meniscus's along the lid.
     wet_remote = with_face(load(r), gaze=(-38, 0))
     wet_remote["eyes"][0]["appearance"]["tear_film"] = {}
     wet_headset = with_face(load(h), gaze=(30, 8))
@@ -110,10 +111,12 @@ def entries():
     wet = [
         ("headset_textured", "headset with a face, the skin's albedo textured (wrinkles, pores, blotches; contrast "
          "0.3) and the sclera's vessels (0.5), looking 20 deg aside", textured, None),
-        ("remote_wet", "remote with a face, a wet sclera (tear film, 2 deg of roughness), looking 38 deg aside: "
-         "the sclera mirrors both LEDs beside the glints", wet_remote, 60),
-        ("headset_wet", "headset with a face, a wet sclera, looking 30 deg aside and 8 up, exposed 0.4 ms (at 1 ms "
-         "the lit sclera saturates and hides them): the sclera's highlights, wide at 35 mm", wet_headset, None),
+        ("remote_wet", "remote with a face, wet eyes (tear film: 2 deg of roughness, a 0.3 mm lower meniscus), "
+         "looking 38 deg aside: the sclera mirrors both LEDs beside the glints, and so does the lower lid's "
+         "tear meniscus", wet_remote, 60),
+        ("headset_wet", "headset with a face, wet eyes, looking 30 deg aside and 8 up, exposed 0.4 ms (at 1 ms "
+         "the lit sclera saturates and hides them): the sclera's highlights, wide at 35 mm, and the tear "
+         "meniscus's small ones along the lower lid", wet_headset, None),
     ]
     return bundled, drawn + camera + wet
 

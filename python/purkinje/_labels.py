@@ -204,7 +204,7 @@ class View:
     rotation_center: Projection
     glints: List[GlintLabel]
     pupil: PupilLabel
-    #: A wet eye's scleral highlights (empty for a dry eye).
+    #: A wet eye's highlights on its tears (empty for a dry eye).
     distractors: List[DistractorLabel] = field(default_factory=list)
 
     @property

@@ -450,7 +450,7 @@ LABEL_COLOURS = {
     "lash": ("#ff33ff", "hidden by a lash"),
     "mesh": ("#3399ff", "hidden by a mesh"),
     "eye": ("#ff3333", "hidden by the eye"),
-    "distractor": ("#00ffff", "scleral highlight"),  # a seen distractor, not a status
+    "distractor": ("#00ffff", "highlight on the tears"),  # a seen distractor, not a status
 }
 
 

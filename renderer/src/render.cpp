@@ -27,6 +27,8 @@
 #include "integrator.h"
 #include "pixel_filter.h"
 #include "sampler.h"
+#include "mirror_radiometry.h"
+#include "scene_geometry.h"
 #include "tear_meniscus.h"
 #include "purkinje/models/check.h"
 #include "purkinje/renderer/ray_tracer.h"
@@ -418,7 +420,10 @@ void image_distractors(const Scene& scene, int camera_index, const std::vector<T
         } else {
           const auto meniscus = std::find_if(menisci.begin(), menisci.end(),
                                              [&](const TearMeniscus& m) { return m.eye() == view.eye; });
-          image.radiometry = meniscus_highlight_radiometry(*meniscus, led, camera, d.reflection);
+          // Only this render's menisci label such highlights.
+          image.radiometry = meniscus == menisci.end()
+                                 ? failed_radiometry(PathStatus::not_converged)
+                                 : meniscus_highlight_radiometry(*meniscus, led, camera, d.reflection);
         }
         if (image.radiometry.status != PathStatus::ok) d.status = image.status = image.radiometry.status;
         const double whole = image.radiometry.power_w * electrons_per_watt(camera.sensor(), led.wavelength_nm) *
@@ -607,25 +612,65 @@ struct Highlight {
   GlintImage image;
   int from_middle = 0;
 };
-// Which highlight it is across the instants: eye, kind, light, and its
-// place among that light's highlights on that mirror (along the lid for a
-// meniscus). Ordered as the views list their distractors.
-using HighlightKey = std::tuple<int, DistractorKind, int, int>;
 
 // `result`'s distractors with their labels (its camera's views in order,
-// as image_distractors lists them) and keys.
-std::vector<std::pair<HighlightKey, Highlight>> highlights_of(const RenderResult& result) {
-  std::vector<std::pair<HighlightKey, Highlight>> out;
-  std::map<std::tuple<int, DistractorKind, int>, int> count;
+// as image_distractors lists them).
+std::vector<Highlight> highlights_of(const RenderResult& result) {
+  std::vector<Highlight> out;
   std::size_t next = 0;
   for (const EyeInCameraTruth& view : result.truth.views) {
     if (view.camera != result.camera) continue;
-    for (const DistractorTruth& d : view.distractors) {
-      const int ordinal = count[{view.eye, d.kind, d.illuminator}]++;
-      out.push_back({{view.eye, d.kind, d.illuminator, ordinal}, {d, result.distractors.at(next++), 0}});
-    }
+    for (const DistractorTruth& d : view.distractors) out.push_back({d, result.distractors.at(next++), 0});
   }
   return out;
+}
+
+// One highlight across a moving eye's instants: its eye, kind and light;
+// the instant nearest mid-exposure that has it; where the latest instant
+// had it; its electrons over the exposure.
+struct HighlightTrack {
+  int eye = 0;
+  DistractorKind kind = DistractorKind::sclera;
+  int illuminator = 0;
+  Highlight nearest;
+  Point3 last;
+  double electrons = 0;
+};
+
+// A meniscus's highlights of one light are told apart across instants by
+// where they lie: the nearest one the last instant had, within this.
+constexpr double kTrackReachMm = 0.5;
+
+// Adds the instant's highlights to their tracks (a sclera has one per eye
+// and light; a meniscus's go to the nearest track of their eye and light
+// that this instant has not yet fed), or starts new ones.
+void follow_highlights(std::vector<Highlight> instant, int from_middle, int frames, std::vector<HighlightTrack>& tracks) {
+  std::vector<bool> fed(tracks.size(), false);
+  for (Highlight& h : instant) {
+    h.from_middle = from_middle;
+    const DistractorTruth& d = h.truth;
+    int best = -1;
+    double best_distance = d.kind == DistractorKind::sclera ? std::numeric_limits<double>::infinity() : kTrackReachMm;
+    for (std::size_t t = 0; t < tracks.size(); ++t) {
+      const HighlightTrack& track = tracks[t];
+      if (fed[t] || track.eye != h.image.eye || track.kind != d.kind || track.illuminator != d.illuminator) continue;
+      const double gap = d.kind == DistractorKind::sclera ? 0.0 : distance(track.last, d.reflection.point);
+      if (gap <= best_distance) {
+        best = static_cast<int>(t);
+        best_distance = gap;
+      }
+    }
+    if (best < 0) {
+      tracks.push_back({h.image.eye, d.kind, d.illuminator, h, d.reflection.point, 0});
+      fed.push_back(false);
+      best = static_cast<int>(tracks.size()) - 1;
+    }
+    HighlightTrack& track = tracks[best];
+    fed[best] = true;
+    track.last = d.reflection.point;
+    if (h.image.electrons > 0 && std::isfinite(h.image.electrons)) track.electrons += h.image.electrons / frames;
+    if (from_middle < track.nearest.from_middle) track.nearest = h;
+  }
 }
 
 // The AOVs that are a highlight's share of the light: summed over a
@@ -687,11 +732,10 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     std::vector<double> sum;
     std::vector<std::vector<double>> glint_sums;  // per "glint" and "glint.<light>" AOV, in order
     std::vector<double> glint_electrons;           // per glint image, over the exposure
-    // A distractor's, by HighlightKey: one may come and go as the eye
-    // turns. One missing at mid-exposure is labelled as at the instant
-    // nearest it where it exists.
-    std::map<HighlightKey, double> distractor_electrons;
-    std::map<HighlightKey, Highlight> nearest_highlight;
+    // The distractors, followed across the instants: one may come and go
+    // as the eye turns. One missing at mid-exposure is labelled as at the
+    // instant nearest it where it exists.
+    std::vector<HighlightTrack> tracks;
     RenderResult other;
     Scene moved = scene;
     for (int k = 0; k < frames; ++k) {
@@ -714,12 +758,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
           glint_electrons[i] += target.glints[i].electrons / frames;
         }
       }
-      for (auto& [key, h] : highlights_of(target)) {
-        if (h.image.electrons > 0 && std::isfinite(h.image.electrons)) distractor_electrons[key] += h.image.electrons / frames;
-        h.from_middle = std::abs(k - middle);
-        const auto found = nearest_highlight.find(key);
-        if (found == nearest_highlight.end() || h.from_middle < found->second.from_middle) nearest_highlight[key] = h;
-      }
+      follow_highlights(highlights_of(target), std::abs(k - middle), frames, tracks);
       for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += light[i];
       std::size_t g = 0;
       for (const NamedPlane& aov : target.aovs) {
@@ -734,16 +773,27 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     // status stay the mid-exposure instant's).
     for (std::size_t i = 0; i < result.glints.size(); ++i) result.glints[i].electrons = glint_electrons[i];
     // Each view's distractors: the mid-exposure instant's, and as at the
-    // nearest instant those it has not; in key order, as each instant's.
+    // nearest instant those it has not; by kind, light, and along the lid
+    // (head-frame x), as each instant's.
+    const auto along_lid = [&](const HighlightTrack& t) {
+      if (t.kind != DistractorKind::tear_meniscus) return 0.0;
+      return (head_placement(scene, t.eye).world_from_head.inverse() * t.nearest.truth.reflection.point).x;
+    };
+    std::vector<std::tuple<int, DistractorKind, int, double, std::size_t>> order;
+    for (std::size_t t = 0; t < tracks.size(); ++t) {
+      order.emplace_back(tracks[t].eye, tracks[t].kind, tracks[t].illuminator, along_lid(tracks[t]), t);
+    }
+    std::sort(order.begin(), order.end());
     std::vector<GlintImage> images;
     for (EyeInCameraTruth& view : result.truth.views) {
       if (view.camera != camera_index) continue;
       view.distractors.clear();
-      for (const auto& [key, h] : nearest_highlight) {
-        if (std::get<0>(key) != view.eye) continue;
-        view.distractors.push_back(h.truth);
-        GlintImage image = h.image;
-        image.electrons = distractor_electrons[key];
+      for (const auto& entry : order) {
+        const HighlightTrack& track = tracks[std::get<4>(entry)];
+        if (track.eye != view.eye) continue;
+        view.distractors.push_back(track.nearest.truth);
+        GlintImage image = track.nearest.image;
+        image.electrons = track.electrons;
         images.push_back(image);
       }
     }

@@ -25,6 +25,9 @@ constexpr double kNodeStepMm = 0.1;
 // this spacing: two highlights closer than this (a fold, where they are
 // about to merge and vanish) may be missed.
 constexpr double kScanStepMm = 0.05;
+// A root of the bisector's part along the meniscus: anything larger is a
+// jump between circles, not a highlight.
+constexpr double kRootTolerance = 1e-9;
 // The meniscus ends this far along the fissure toward each canthus.
 constexpr double kFissureReach = 0.9;
 
@@ -59,6 +62,7 @@ struct TearMeniscus::Frame {
 std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_head, double radius_mm,
                                                 std::function<double(double)> margin_mm, const ShellOffset& shell,
                                                 double x_lo, double x_hi) {
+  if (!(x_hi > x_lo) || !(radius_mm > 0)) return std::nullopt;
   TearMeniscus out;
   out.eye_ = eye;
   out.world_from_head_ = world_from_head;
@@ -69,6 +73,7 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
   const int count = std::max(2, static_cast<int>(std::ceil((x_hi - x_lo) / kNodeStepMm)) + 1);
   const double step = (x_hi - x_lo) / (count - 1);
   std::vector<std::optional<double>> z(count);
+  std::vector<double> centre_x(count, 0.0);
   std::vector<Vector3> to_centre(count, Vector3{0, 0, 0});
   for (int i = 0; i < count; ++i) {
     const double x = x_lo + i * step;
@@ -76,65 +81,78 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
     const double m1 = (out.margin_(x + kSlopeStepMm) - out.margin_(x - kSlopeStepMm)) / (2 * kSlopeStepMm);
     const double w = std::sqrt(1 + m1 * m1);
     const double X = x - r * m1 / w, Y = m + r / w;
+    centre_x[i] = X;
     z[i] = touching_height(shell, X, Y, r);
     if (z[i]) to_centre[i] = unit(shell(Point3{X, Y, *z[i]}));
   }
   // The run of nodes about the fissure's middle (x = 0) where the fillet
-  // exists.
-  int middle = static_cast<int>(std::lround(std::clamp(-x_lo / step, 0.0, count - 1.0)));
+  // exists, its centres' x increasing (the wall curves gentler than r).
+  const int middle = static_cast<int>(std::lround(std::clamp(-x_lo / step, 0.0, count - 1.0)));
   if (!z[middle]) return std::nullopt;
   int first = middle, last = middle;
-  while (first > 0 && z[first - 1]) --first;
-  while (last + 1 < count && z[last + 1]) ++last;
+  while (first > 0 && z[first - 1] && centre_x[first - 1] < centre_x[first]) --first;
+  while (last + 1 < count && z[last + 1] && centre_x[last + 1] > centre_x[last]) ++last;
   if (last - first < 3) return std::nullopt;
-  out.x0_ = x_lo + first * step;
-  out.step_ = step;
+  out.wall_lo_ = x_lo + first * step;
+  out.wall_hi_ = x_lo + last * step;
   for (int i = first; i <= last; ++i) {
+    out.x_.push_back(centre_x[i]);
     out.z_.push_back(*z[i]);
     out.to_centre_.push_back(to_centre[i]);
   }
-  // A natural cubic spline's second derivatives (Thomas's algorithm).
+  // Z over the centres' x (not the wall's: the margin's curvature jumps
+  // at its middle, where the fissure's two parabolas meet, and the
+  // centres' speed with it; their path does not turn there). A cubic
+  // spline with parabolic run-out (the end intervals' second derivative
+  // constant, as a fillet's is, rather than 0): Thomas's algorithm.
   const int n = static_cast<int>(out.z_.size());
-  out.z2_.assign(n, 0.0);
-  std::vector<double> diagonal(n, 4.0), rhs(n, 0.0);
-  for (int i = 1; i + 1 < n; ++i) rhs[i] = 6 * (out.z_[i + 1] - 2 * out.z_[i] + out.z_[i - 1]) / (step * step);
+  std::vector<double> h(n - 1), diagonal(n, 0.0), rhs(n, 0.0);
+  for (int i = 0; i + 1 < n; ++i) h[i] = out.x_[i + 1] - out.x_[i];
+  for (int i = 1; i + 1 < n; ++i) {
+    diagonal[i] = 2 * (h[i - 1] + h[i]);
+    rhs[i] = 6 * ((out.z_[i + 1] - out.z_[i]) / h[i] - (out.z_[i] - out.z_[i - 1]) / h[i - 1]);
+  }
+  diagonal[1] += h[0];          // M_0 = M_1
+  diagonal[n - 2] += h[n - 2];  // M_n-1 = M_n-2
   for (int i = 2; i + 1 < n; ++i) {
-    const double f = 1 / diagonal[i - 1];
-    diagonal[i] -= f;
+    const double f = h[i - 1] / diagonal[i - 1];
+    diagonal[i] -= f * h[i - 1];
     rhs[i] -= f * rhs[i - 1];
   }
-  for (int i = n - 2; i >= 1; --i) out.z2_[i] = (rhs[i] - (i + 1 < n - 1 ? out.z2_[i + 1] : 0.0)) / diagonal[i];
+  out.z2_.assign(n, 0.0);
+  for (int i = n - 2; i >= 1; --i) out.z2_[i] = (rhs[i] - (i + 2 < n ? h[i] * out.z2_[i + 1] : 0.0)) / diagonal[i];
+  out.z2_[0] = out.z2_[1];
+  out.z2_[n - 1] = out.z2_[n - 2];
   return out;
 }
 
 TearMeniscus::Frame TearMeniscus::frame(double x) const {
   Frame f;
-  const int n = static_cast<int>(z_.size());
-  const double at = (x - x0_) / step_;
-  if (!(at >= 0 && at <= n - 1)) return f;
+  if (!(x >= wall_lo_ && x <= wall_hi_)) return f;
   const double m = margin_(x);
   const double h = kSlopeStepMm, k = kCurvatureStepMm;
   const double m1 = (margin_(x + h) - margin_(x - h)) / (2 * h);
   const double m2 = (margin_(x + k) - 2 * m + margin_(x - k)) / (k * k);
   const double w = std::sqrt(1 + m1 * m1);
   const double nx = -m1 / w, ny = 1 / w;  // the wall's normal, into the opening (+y)
-  // The spline on [x_i, x_i+1].
-  const int i = std::min(static_cast<int>(at), n - 2);
-  const double t = x - (x0_ + i * step_), u = step_ - t;
-  const double a = z_[i] / step_ - z2_[i] * step_ / 6, b = z_[i + 1] / step_ - z2_[i + 1] * step_ / 6;
-  const double Z = (z2_[i] * u * u * u + z2_[i + 1] * t * t * t) / (6 * step_) + a * u + b * t;
-  const double dZ = (z2_[i + 1] * t * t - z2_[i] * u * u) / (2 * step_) + b - a;
-  if (!std::isfinite(m) || !std::isfinite(Z)) return f;
-  f.c = Point3{x + r_ * nx, m + r_ * ny, Z};
-  // c' = ((1 - r m'' / w^3) (1, m'), Z'): the wall's normal turns along
-  // the wall, and stays perpendicular to c'.
-  const double scale = 1 - r_ * m2 / (w * w * w);
-  if (!(scale > 0)) return f;  // the wall curves tighter than r: no fillet
-  f.T = UnitVector3::normalize(Vector3{scale, scale * m1, dZ});
+  const double X = x + r_ * nx;
+  // The spline on [X_i, X_i+1].
+  const int n = static_cast<int>(z_.size());
+  if (!(X >= x_.front() && X <= x_.back()) || !std::isfinite(m)) return f;
+  const int i = std::clamp(static_cast<int>(std::upper_bound(x_.begin(), x_.end(), X) - x_.begin()) - 1, 0, n - 2);
+  const double span = x_[i + 1] - x_[i], t = X - x_[i], u = x_[i + 1] - X;
+  const double a = z_[i] / span - z2_[i] * span / 6, b = z_[i + 1] / span - z2_[i + 1] * span / 6;
+  const double Z = (z2_[i] * u * u * u + z2_[i + 1] * t * t * t) / (6 * span) + a * u + b * t;
+  const double dZ = (z2_[i + 1] * t * t - z2_[i] * u * u) / (2 * span) + b - a;  // dZ/dX
+  f.c = Point3{X, m + r_ * ny, Z};
+  // c' is (1 - r m'' / w^3) (1, m', dZ/dX) along the wall: the wall's
+  // normal turns along it and stays perpendicular to c'.
+  if (!(1 - r_ * m2 / (w * w * w) > 0)) return f;  // the wall curves tighter than r: no fillet
+  f.T = UnitVector3::normalize(Vector3{1, m1, dZ});
   f.U = UnitVector3::normalize(Vector3{nx, ny, 0});
   f.V = UnitVector3::normalize(cross(f.T, f.U));
   // Where it touches the shell: the nodes' directions, interpolated.
-  const double s = t / step_;
+  const double s = t / span;
   const Vector3 g = to_centre_[i] * (1 - s) + to_centre_[i + 1] * s;
   f.theta_globe = std::atan2(dot(g, f.V), dot(g, f.U));
   f.valid = true;
@@ -179,18 +197,21 @@ Reflection TearMeniscus::highlight_at(double x, const Point3& source, const Poin
 }
 
 // The root of the bisector's part along the meniscus in [a, b], where it
-// changes sign (fa at a), by regula falsi with the Illinois rule.
-Reflection TearMeniscus::refine(double a, double b, double fa, const Point3& source,
-                                       const Point3& target) const {
+// changes sign (fa at a), by regula falsi with the Illinois rule; no
+// solution where the sign changes by a jump (an invalid circle) rather
+// than through 0.
+Reflection TearMeniscus::refine(double a, double b, double fa, const Point3& source, const Point3& target) const {
   double along = 0;
+  bool valid = true;
   const auto F = [&](double x) {
     const Frame f = frame(x);
-    theta_at(f, source, target, along);
+    valid = valid && f.valid;
+    if (f.valid) theta_at(f, source, target, along);
     return along;
   };
   double fb = F(b);
   int side = 0;
-  for (int i = 0; i < 200 && b - a > 1e-12; ++i) {
+  for (int i = 0; i < 200 && b - a > 1e-12 && valid; ++i) {
     double x = (a * fb - b * fa) / (fb - fa);
     if (!(x > a && x < b)) x = 0.5 * (a + b);
     const double fx = F(x);
@@ -210,25 +231,27 @@ Reflection TearMeniscus::refine(double a, double b, double fa, const Point3& sou
       side = 1;
     }
   }
-  return highlight_at(0.5 * (a + b), source, target);
+  const double x = 0.5 * (a + b);
+  if (!(std::abs(F(x)) <= kRootTolerance) || !valid) return {};
+  return highlight_at(x, source, target);
 }
 
 std::vector<Reflection> TearMeniscus::highlights(const Point3& source_world, const Point3& target_world) const {
   const Point3 source = head_from_world_ * source_world, target = head_from_world_ * target_world;
   std::vector<Reflection> out;
-  const double lo = x0_, hi = x0_ + (static_cast<double>(z_.size()) - 1) * step_;
-  const int steps = std::max(1, static_cast<int>(std::ceil((hi - lo) / kScanStepMm)));
+  const int steps = std::max(1, static_cast<int>(std::ceil((wall_hi_ - wall_lo_) / kScanStepMm)));
   double previous_x = 0, previous_f = 0;
   bool previous_valid = false;
   for (int i = 0; i <= steps; ++i) {
-    const double x = lo + (hi - lo) * i / steps;
+    const double x = wall_lo_ + (wall_hi_ - wall_lo_) * i / steps;
     const Frame f = frame(x);
     double along = 0;
     if (f.valid) theta_at(f, source, target, along);
     const bool valid = f.valid && std::isfinite(along);
-    if (valid && previous_valid && (along == 0 || (along > 0) != (previous_f > 0))) {
-      Reflection h = along == 0 ? highlight_at(x, source, target)
-                                       : refine(previous_x, x, previous_f, source, target);
+    // A root on a node is taken there, and not again as the sign change
+    // that follows it.
+    if (valid && previous_valid && previous_f != 0 && (along == 0 || (along > 0) != (previous_f > 0))) {
+      const Reflection h = along == 0 ? highlight_at(x, source, target) : refine(previous_x, x, previous_f, source, target);
       if (h.status == PathStatus::ok) out.push_back(h);
     }
     previous_x = x;
@@ -238,14 +261,32 @@ std::vector<Reflection> TearMeniscus::highlights(const Point3& source_world, con
   return out;
 }
 
+double TearMeniscus::wall_x_of(const Point3& p) const {
+  // The circle through p: T(x) . (p - c(x)) = 0, by secant steps from p's
+  // own x (within about 2r of it).
+  const auto g = [&](double x) -> std::optional<double> {
+    const Frame f = frame(std::clamp(x, wall_lo_, wall_hi_));
+    if (!f.valid) return std::nullopt;
+    return dot(f.T, p - f.c);
+  };
+  double x0 = std::clamp(p.x, wall_lo_, wall_hi_), x1 = std::clamp(p.x + 0.01, wall_lo_, wall_hi_);
+  std::optional<double> g0 = g(x0), g1 = g(x1);
+  for (int i = 0; i < 50 && g0 && g1 && *g1 != *g0 && std::abs(x1 - x0) > 1e-12; ++i) {
+    const double x2 = std::clamp(x1 - *g1 * (x1 - x0) / (*g1 - *g0), wall_lo_, wall_hi_);
+    x0 = x1;
+    g0 = g1;
+    x1 = x2;
+    g1 = g(x1);
+  }
+  return x1;
+}
+
 Reflection TearMeniscus::highlight_near(const Point3& near, const Point3& source_world,
                                         const Point3& target_world) const {
   const Point3 source = head_from_world_ * source_world, target = head_from_world_ * target_world;
-  // The pipe's parameter is the wall point's x, within r of the point's.
-  const double x0 = (head_from_world_ * near).x;
+  const double x0 = wall_x_of(head_from_world_ * near);
   double along = 0;
   const auto F = [&](double x) -> std::optional<double> {
-    if (x < x0_ || x > x0_ + (static_cast<double>(z_.size()) - 1) * step_) return std::nullopt;
     const Frame f = frame(x);
     if (!f.valid) return std::nullopt;
     theta_at(f, source, target, along);
@@ -255,7 +296,7 @@ Reflection TearMeniscus::highlight_near(const Point3& near, const Point3& source
   if (!f0) return {};
   if (*f0 == 0) return highlight_at(x0, source, target);
   // Widening brackets about x0: the nearest sign change.
-  for (double d = 1e-3; d <= 0.5; d *= 2) {
+  for (double d = 1e-3; d < 1.0; d *= 2) {
     for (const double x : {x0 - d, x0 + d}) {
       const std::optional<double> f = F(x);
       if (!f || (*f > 0) == (*f0 > 0)) continue;

@@ -14,8 +14,8 @@
 //   c(x) = ((x, m(x)) + r n(x), Z(x)),
 // n the wall's unit normal into the opening (in the xy plane), Z where the
 // sphere touches the shell from outside: found at nodes 0.1 mm apart along
-// x (sphere tracing down the head's z) and joined by a natural cubic
-// spline, so that the meniscus is smooth where the shell is not (the cap's
+// x (sphere tracing down the head's z) and joined by a cubic spline over
+// the centres' x, so that the meniscus is smooth where the shell is not (the cap's
 // rim, the limbal band) and within about 1e-8 mm of the exact fillet where
 // it is. The surface is the pipe about c: p = c - r N, N perpendicular to
 // c' on the short arc from n (where it touches the wall) to the direction
@@ -65,9 +65,9 @@ class TearMeniscus {
   // (world): reflections with status ok (on_cap false), in order along the
   // lid from head-frame -x.
   std::vector<Reflection> highlights(const Point3& source, const Point3& target) const;
-  // The highlight nearest `near` (a highlight's point, within 0.5 mm along
-  // the lid) for a source or target moved a little: status no_solution
-  // when none is there.
+  // The highlight nearest `near` (a highlight's point, found again within
+  // 0.5 mm along the lid) for a source or target moved a little: status
+  // no_solution when none is there.
   Reflection highlight_near(const Point3& near, const Point3& source, const Point3& target) const;
 
  private:
@@ -80,15 +80,18 @@ class TearMeniscus {
   double theta_at(const Frame& f, const Point3& source, const Point3& target, double& along) const;
   Reflection highlight_at(double x, const Point3& source, const Point3& target) const;
   Reflection refine(double a, double b, double fa, const Point3& source, const Point3& target) const;
+  // The wall's x of the circle through a head-frame point near the pipe.
+  double wall_x_of(const Point3& p) const;
 
   int eye_ = 0;
   Pose world_from_head_, head_from_world_;
   double r_ = 0;
   std::function<double(double)> margin_;
-  // Nodes x_0 + i h: the centres' Z, the spline's second derivatives, and
-  // the unit vectors from the shell to the centres.
-  double x0_ = 0, step_ = 0;
-  std::vector<double> z_, z2_;
+  // Where along the wall (head-frame x) it runs, and its nodes: the
+  // centres' x and Z, the spline's second derivatives of Z over x, and the
+  // unit vectors from the shell to the centres.
+  double wall_lo_ = 0, wall_hi_ = 0;
+  std::vector<double> x_, z_, z2_;
   std::vector<Vector3> to_centre_;
 };
 

@@ -211,6 +211,64 @@ TEST(TearMeniscusHighlights, LieWhereTheLabelsSayWithTheirElectrons) {
   EXPECT_GE(alone, 2);
 }
 
+TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactFillet) {
+  // The margin a parabola m = -6 + 0.02 x^2 on the spherical globe: the
+  // fillet's centres are ((x, m) + r n, sqrt((R + r)^2 - X^2 - Y^2)) in
+  // closed form, n = (-m', 1) / sqrt(1 + m'^2). Lights and cameras off the
+  // plane x = 0: each highlight found lies r from that curve, and the
+  // normal from its nearest centre bisects the directions to the light and
+  // the camera.
+  const auto margin = [](double x) { return kMargin + 0.02 * x * x; };
+  const ShellOffset sphere = [](const Point3& p) {
+    const Vector3 v = p.from_origin();
+    return v - v * (kGlobe / v.norm());
+  };
+  const TearMeniscus meniscus = TearMeniscus::build(0, Pose(), kRadius, margin, sphere, -9, 9).value();
+  const auto centre = [&](double x) {
+    const double m1 = 0.04 * x, w = std::sqrt(1 + m1 * m1);
+    const double X = x - kRadius * m1 / w, Y = margin(x) + kRadius / w;
+    return Point3{X, Y, std::sqrt((kGlobe + kRadius) * (kGlobe + kRadius) - X * X - Y * Y)};
+  };
+  // Also a light and a camera either side of the fillet's mid-arc normal
+  // at x = 6 and at x = -7 (their normals by hand: halfway between the
+  // wall's, about (-+0.23, 0.97, 0), and the globe's, about
+  // (+-0.48, -0.41, 0.78)), 40 mm away: highlights far from the middle.
+  std::vector<std::pair<Point3, Point3>> layouts = {{Point3{8, -20, 40}, Point3{-3, -12, 45}},
+                                                    {Point3{-150, -300, 600}, Point3{40, -150, 600}}};
+  for (const double side : {6.0, -7.0}) {
+    const Point3 at{side, -5.3, 9.5};
+    const Vector3 h = Vector3{0.25 * side / std::abs(side), 0.56, 0.78} / Vector3{0.25, 0.56, 0.78}.norm();
+    const Vector3 e = cross(h, Vector3{0, 0, 1}) / cross(h, Vector3{0, 0, 1}).norm();
+    layouts.push_back({at + (h + e * 0.2) * 40, at + (h - e * 0.2) * 40});
+  }
+  int found = 0, far_out = 0;
+  for (const auto& [source, target] : layouts) {
+    for (const Reflection& r : meniscus.highlights(source, target)) {
+      ++found;
+      if (std::abs(r.point.x) > 4) ++far_out;
+      // The nearest centre, by golden-section search.
+      double a = r.point.x - 1, b = r.point.x + 1;
+      const double g = 0.5 * (std::sqrt(5.0) - 1);
+      for (int i = 0; i < 100; ++i) {
+        const double c = b - g * (b - a), d = a + g * (b - a);
+        if (distance(r.point, centre(c)) < distance(r.point, centre(d))) b = d; else a = c;
+      }
+      const Point3 nearest = centre(0.5 * (a + b));
+      EXPECT_NEAR(distance(r.point, nearest), kRadius, 1e-7) << r.point.x;
+      const Vector3 n = (nearest - r.point) / kRadius;
+      const Vector3 bisector = (source - r.point) / (source - r.point).norm() + (target - r.point) / (target - r.point).norm();
+      EXPECT_LT((n - bisector / bisector.norm()).norm(), 1e-6) << r.point.x;
+      // Found again from its own point when the target moves a little (as
+      // the radiometry's differences move it), close by.
+      const Reflection again = meniscus.highlight_near(r.point, source, target + Vector3{0.01, 0.01, 0});
+      ASSERT_EQ(again.status, PathStatus::ok) << r.point.x;
+      EXPECT_LT(distance(again.point, r.point), 0.05) << r.point.x;
+    }
+  }
+  EXPECT_GE(found, 4);
+  EXPECT_GE(far_out, 2);  // away from the middle, where the wall's and the point's x differ
+}
+
 TEST(TearMeniscus, TouchesTheCorneaWhereTheLidCrossesIt) {
   // The headset face's lower margin lies over the cornea in the middle
   // (5.5 mm below the centre, inside the limbus): the fillet's centres
@@ -241,6 +299,34 @@ TEST(TearMeniscus, TouchesTheCorneaWhereTheLidCrossesIt) {
     }
   }
   EXPECT_GE(on_cornea, 3);
+}
+
+TEST(TearMeniscusHighlights, AMovingEyesHighlightsAreTheWholeExposures) {
+  // 400 deg/s of yaw during the exposure: the menisci's highlights move
+  // along the lid, and some exist at some instants only. Every highlight
+  // drawn is labelled, with the electrons of the whole exposure, each
+  // light's along the lid.
+  Scene scene = wet_dark_face();
+  scene.eyes[0].set_motion({400, 0});
+  RenderOptions options;
+  options.noise = false;
+  const RenderResult result = render(scene, 0, options);
+  const std::vector<DistractorTruth>& truth = result.truth.views[0].distractors;
+  ASSERT_EQ(truth.size(), result.distractors.size());
+  const ImagePlane* mask = nullptr;
+  for (const NamedPlane& p : result.aovs) {
+    if (p.name == "distractor") mask = &p.plane;
+  }
+  ASSERT_NE(mask, nullptr);
+  double labelled = 0, imaged = 0;
+  for (const GlintImage& d : result.distractors) labelled += d.electrons;
+  for (std::size_t i = 0; i < mask->values.size(); ++i) imaged += double(mask->values[i]) * result.electrons.values[i];
+  EXPECT_GT(labelled, 0);
+  EXPECT_NEAR(imaged / labelled, 1, 1e-3);
+  for (std::size_t k = 1; k < truth.size(); ++k) {
+    EXPECT_LE(static_cast<int>(truth[k - 1].kind) * 100 + truth[k - 1].illuminator,
+              static_cast<int>(truth[k].kind) * 100 + truth[k].illuminator);
+  }
 }
 
 TEST(TearMeniscusHighlights, AreNoneWithoutAFaceOrWithARadiusOf0) {

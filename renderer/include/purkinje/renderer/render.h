@@ -86,10 +86,11 @@ struct RenderOptions {
   // 1e-5 of its light), binned on the iris plane.
   std::int64_t reference_photons_per_light = std::int64_t{1} << 18;
   bool per_light_glint_masks = false;
-  // Trace only these pixels (the rest stay 0 in radiance and AOVs); glints
-  // and the sensor still cover the whole image. A wet sclera's highlights
-  // are light on the sclera the traced pixels see: only the region's part
-  // is drawn, and their labels' electrons count it. Absent: every pixel.
+  // Trace only these pixels (the rest stay 0 in radiance and AOVs); glints,
+  // tear menisci's highlights and the sensor still cover the whole image.
+  // A wet sclera's highlights are light on the sclera the traced pixels
+  // see: only the region's part is drawn, and their labels' electrons
+  // count it. Absent: every pixel.
   std::optional<PixelRegion> region;
   int threads = 0;                // 0: all hardware threads; results do not depend on it
   // Called from worker threads with the fraction of rows done; must be thread-safe.
@@ -127,8 +128,9 @@ struct RenderResult {
   std::vector<NamedPlane> aovs; // depth, N.x/N.y/N.z, id, class coverages, glint masks, distractor mask
   SceneTruth truth;             // compute_truth with the ray tracer's occlusion (every camera's views)
   std::vector<GlintImage> glints;
-  // The scleral highlights of eyes with a tear film, as glints (with their
-  // roughness's spread): each view's DistractorTruth in order.
+  // The highlights of eyes with a tear film (their sclera's, with the
+  // roughness's spread, and their tear menisci's), as glints: each view's
+  // DistractorTruth in order.
   std::vector<GlintImage> distractors;
 };
 

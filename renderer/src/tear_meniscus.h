@@ -15,9 +15,10 @@
 // n the wall's unit normal into the opening (in the xy plane), Z where the
 // sphere touches the shell from outside: found at nodes 0.1 mm apart along
 // x (sphere tracing down the head's z) and joined by a cubic spline over
-// the centres' x, so that the meniscus is smooth where the shell is not (the cap's
-// rim, the limbal band) and within about 1e-8 mm of the exact fillet where
-// it is. The surface is the pipe about c: p = c - r N, N perpendicular to
+// the centres' x, so that the meniscus is smooth where the shell is not
+// (the cap's rim, the limbal band; there it strays from the exact fillet
+// by up to a few hundredths of a millimetre) and within 1e-7 mm of it
+// where the shell is smooth (tests). The surface is the pipe about c: p = c - r N, N perpendicular to
 // c' on the short arc from n (where it touches the wall) to the direction
 // from the shell's nearest point to c (where it touches the shell).
 //

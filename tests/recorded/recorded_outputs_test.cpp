@@ -137,7 +137,7 @@ TEST_F(RecordedOutputs, BundledAndHardScenesRender) {
   for (const std::string s : {"remote", "headset", "remote_glasses", "hard/headset_defocused", "hard/headset_half_closed",
                               "hard/headset_noisy", "hard/remote_defocused", "hard/remote_half_closed",
                               "hard/remote_noisy", "hard/headset_mjpeg", "hard/headset_hot_pixels",
-                              "hard/headset_saccade", "hard/headset_face"}) {
+                              "hard/headset_saccade", "hard/headset_face", "hard/headset_face_wet"}) {
     ASSERT_NO_FATAL_FAILURE(run("render " + scene(s + ".json") + " -o " + in_root(s)));
     commands += "render " + s + ".json -o " + s + "\n";
   }

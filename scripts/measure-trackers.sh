@@ -53,6 +53,10 @@ measure headset_face assets/scenes/hard/headset_face.json "$hard" --variation-se
 # The skin's and sclera's textures (session 31): the same draws, textured.
 measure headset_face_textured assets/scenes/hard/headset_face_textured.json "$hard" --variation-seed 6
 measure remote_face assets/scenes/remote_face.json "$hard" --variation-seed 6
+# Wet faces (session 32): the same draws with tear films, whose sclera and
+# lower tear menisci mirror the LEDs.
+measure headset_face_wet assets/scenes/hard/headset_face_wet.json "$hard" --variation-seed 6
+measure remote_face_wet assets/scenes/hard/remote_face_wet.json "$hard" --variation-seed 6
 # Glints on the pupil's edge: pupils as wide as the glints' spread (the
 # remote's two glints lie near the pupil's centre unless the eye turns).
 measure remote_glints_on_edge assets/scenes/remote.json "$hard" --min-pupil-mm 1 --max-pupil-mm 1.6 --variation-seed 4

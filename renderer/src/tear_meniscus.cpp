@@ -252,7 +252,7 @@ std::vector<Reflection> TearMeniscus::highlights(const Point3& source_world, con
     // that follows it.
     if (valid && previous_valid && previous_f != 0 && (along == 0 || (along > 0) != (previous_f > 0))) {
       const Reflection h = along == 0 ? highlight_at(x, source, target) : refine(previous_x, x, previous_f, source, target);
-      if (h.status == PathStatus::ok) out.push_back(h);
+      if (h.status == PathStatus::ok && on_surface(head_from_world_ * h.point)) out.push_back(h);
     }
     previous_x = x;
     previous_f = along;
@@ -261,24 +261,55 @@ std::vector<Reflection> TearMeniscus::highlights(const Point3& source_world, con
   return out;
 }
 
-double TearMeniscus::wall_x_of(const Point3& p) const {
-  // The circle through p: T(x) . (p - c(x)) = 0, by secant steps from p's
-  // own x (within about 2r of it).
-  const auto g = [&](double x) -> std::optional<double> {
-    const Frame f = frame(std::clamp(x, wall_lo_, wall_hi_));
-    if (!f.valid) return std::nullopt;
-    return dot(f.T, p - f.c);
+double TearMeniscus::wall_x_of(const Point3& p, double* gap_mm) const {
+  // The circle through p: its centre is the centre line's nearest point to
+  // p (the plane through the nearest centre perpendicular to the line
+  // holds p; other planes of circles may hold it too, farther away), by a
+  // scan within 1 mm of p's x and golden-section search about the best.
+  const auto gap = [&](double x) {
+    const Frame f = frame(x);
+    return f.valid ? distance(p, f.c) : std::numeric_limits<double>::infinity();
   };
-  double x0 = std::clamp(p.x, wall_lo_, wall_hi_), x1 = std::clamp(p.x + 0.01, wall_lo_, wall_hi_);
-  std::optional<double> g0 = g(x0), g1 = g(x1);
-  for (int i = 0; i < 50 && g0 && g1 && *g1 != *g0 && std::abs(x1 - x0) > 1e-12; ++i) {
-    const double x2 = std::clamp(x1 - *g1 * (x1 - x0) / (*g1 - *g0), wall_lo_, wall_hi_);
-    x0 = x1;
-    g0 = g1;
-    x1 = x2;
-    g1 = g(x1);
+  constexpr double kStep = 0.02;
+  const double from = std::max(wall_lo_, p.x - 1.0), to = std::min(wall_hi_, p.x + 1.0);
+  double best = std::clamp(p.x, wall_lo_, wall_hi_), best_gap = gap(best);
+  for (double x = from; x <= to; x += kStep) {
+    const double g = gap(x);
+    if (g < best_gap) {
+      best = x;
+      best_gap = g;
+    }
   }
-  return x1;
+  double a = std::max(wall_lo_, best - kStep), b = std::min(wall_hi_, best + kStep);
+  const double golden = 0.5 * (std::sqrt(5.0) - 1);
+  double c = b - golden * (b - a), d = a + golden * (b - a), fc = gap(c), fd = gap(d);
+  for (int i = 0; i < 60; ++i) {
+    if (fc < fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - golden * (b - a);
+      fc = gap(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + golden * (b - a);
+      fd = gap(d);
+    }
+  }
+  const double x = 0.5 * (a + b);
+  if (gap_mm) *gap_mm = gap(x);
+  return x;
+}
+
+bool TearMeniscus::on_surface(const Point3& head_point) const {
+  // Where the centre line bends tighter than r (over the limbus's edge)
+  // the circles' surface folds through itself: a point inside another
+  // circle's sphere is inside the tears, not on their surface.
+  double gap = 0;
+  wall_x_of(head_point, &gap);
+  return gap >= r_ * (1 - 1e-9);
 }
 
 Reflection TearMeniscus::highlight_near(const Point3& near, const Point3& source_world,

@@ -26,7 +26,10 @@
 // camera: on each circle (fixed x) the normal's angle follows from the
 // bisector by a quickly contracting iteration (the point moves by r, the
 // bisector by r / distance), and along x the bisector's component along c'
-// must vanish, found by scanning for sign changes and refining them.
+// must vanish, found by scanning for sign changes and refining them. Where
+// the centre line bends tighter than r (over the limbus's edge) the
+// circles' surface folds through itself: a highlight inside another
+// circle's sphere is inside the tears and is dropped.
 //
 // Left out: the light the tears refract (what lies under them is drawn as
 // if dry), the meniscus's thinning toward the canthi (it ends at 90% of
@@ -81,8 +84,13 @@ class TearMeniscus {
   double theta_at(const Frame& f, const Point3& source, const Point3& target, double& along) const;
   Reflection highlight_at(double x, const Point3& source, const Point3& target) const;
   Reflection refine(double a, double b, double fa, const Point3& source, const Point3& target) const;
-  // The wall's x of the circle through a head-frame point near the pipe.
-  double wall_x_of(const Point3& p) const;
+  // The wall's x of the circle through a head-frame point near the pipe:
+  // the centre line's nearest point, within 1 mm of p's x; `gap_mm`, if
+  // given, gets its distance.
+  double wall_x_of(const Point3& p, double* gap_mm = nullptr) const;
+  // Whether a head-frame point on some circle is on the tears' surface:
+  // no other circle's sphere holds it.
+  bool on_surface(const Point3& head_point) const;
 
   int eye_ = 0;
   Pose world_from_head_, head_from_world_;

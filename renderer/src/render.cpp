@@ -641,32 +641,39 @@ struct HighlightTrack {
 // where they lie: the nearest one the last instant had, within this.
 constexpr double kTrackReachMm = 0.5;
 
-// Adds the instant's highlights to their tracks (a sclera has one per eye
-// and light; a meniscus's go to the nearest track of their eye and light
-// that this instant has not yet fed), or starts new ones.
+// Adds the instant's highlights to their tracks, or starts new ones: a
+// sclera has one per eye and light; a meniscus's join the tracks of their
+// eye and light whose last points lie within kTrackReachMm, the closest
+// pairs first.
 void follow_highlights(std::vector<Highlight> instant, int from_middle, int frames, std::vector<HighlightTrack>& tracks) {
-  std::vector<bool> fed(tracks.size(), false);
-  for (Highlight& h : instant) {
+  const std::size_t old_tracks = tracks.size();
+  std::vector<int> track_of(instant.size(), -1);
+  std::vector<bool> fed(old_tracks, false);
+  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;  // distance, highlight, track
+  for (std::size_t k = 0; k < instant.size(); ++k) {
+    const DistractorTruth& d = instant[k].truth;
+    for (std::size_t t = 0; t < old_tracks; ++t) {
+      const HighlightTrack& track = tracks[t];
+      if (track.eye != instant[k].image.eye || track.kind != d.kind || track.illuminator != d.illuminator) continue;
+      const double gap = d.kind == DistractorKind::sclera ? 0.0 : distance(track.last, d.reflection.point);
+      if (gap <= kTrackReachMm) pairs.emplace_back(gap, k, t);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  for (const auto& [gap, k, t] : pairs) {
+    if (track_of[k] >= 0 || fed[t]) continue;
+    track_of[k] = static_cast<int>(t);
+    fed[t] = true;
+  }
+  for (std::size_t k = 0; k < instant.size(); ++k) {
+    Highlight& h = instant[k];
     h.from_middle = from_middle;
     const DistractorTruth& d = h.truth;
-    int best = -1;
-    double best_distance = d.kind == DistractorKind::sclera ? std::numeric_limits<double>::infinity() : kTrackReachMm;
-    for (std::size_t t = 0; t < tracks.size(); ++t) {
-      const HighlightTrack& track = tracks[t];
-      if (fed[t] || track.eye != h.image.eye || track.kind != d.kind || track.illuminator != d.illuminator) continue;
-      const double gap = d.kind == DistractorKind::sclera ? 0.0 : distance(track.last, d.reflection.point);
-      if (gap <= best_distance) {
-        best = static_cast<int>(t);
-        best_distance = gap;
-      }
-    }
-    if (best < 0) {
+    if (track_of[k] < 0) {
       tracks.push_back({h.image.eye, d.kind, d.illuminator, h, d.reflection.point, 0});
-      fed.push_back(false);
-      best = static_cast<int>(tracks.size()) - 1;
+      track_of[k] = static_cast<int>(tracks.size()) - 1;
     }
-    HighlightTrack& track = tracks[best];
-    fed[best] = true;
+    HighlightTrack& track = tracks[track_of[k]];
     track.last = d.reflection.point;
     if (h.image.electrons > 0 && std::isfinite(h.image.electrons)) track.electrons += h.image.electrons / frames;
     if (from_middle < track.nearest.from_middle) track.nearest = h;

@@ -80,7 +80,8 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
     const double m = out.margin_(x);
     const double m1 = (out.margin_(x + kSlopeStepMm) - out.margin_(x - kSlopeStepMm)) / (2 * kSlopeStepMm);
     const double w = std::sqrt(1 + m1 * m1);
-    const double X = x - r * m1 / w, Y = m + r / w;
+    const double nx = -m1 / w, ny = 1 / w;  // as frame() computes them, to the bit
+    const double X = x + r * nx, Y = m + r * ny;
     centre_x[i] = X;
     z[i] = touching_height(shell, X, Y, r);
     if (z[i]) to_centre[i] = unit(shell(Point3{X, Y, *z[i]}));
@@ -258,49 +259,60 @@ std::vector<Reflection> TearMeniscus::highlights(const Point3& source_world, con
     previous_f = along;
     previous_valid = valid;
   }
+  // Along the lid by their points (as a moving eye's are ordered).
+  std::stable_sort(out.begin(), out.end(), [&](const Reflection& a, const Reflection& b) {
+    return (head_from_world_ * a.point).x < (head_from_world_ * b.point).x;
+  });
   return out;
 }
 
 double TearMeniscus::wall_x_of(const Point3& p, double* gap_mm) const {
   // The circle through p: its centre is the centre line's nearest point to
   // p (the plane through the nearest centre perpendicular to the line
-  // holds p; other planes of circles may hold it too, farther away), by a
-  // scan within 1 mm of p's x and golden-section search about the best.
+  // holds p; other planes of circles may hold it too, farther away): a
+  // scan within 1 + 2r of p's x (the wall's x and the point's differ by
+  // less than 2r), and golden-section search about each of its minima.
   const auto gap = [&](double x) {
     const Frame f = frame(x);
     return f.valid ? distance(p, f.c) : std::numeric_limits<double>::infinity();
   };
   constexpr double kStep = 0.02;
-  const double from = std::max(wall_lo_, p.x - 1.0), to = std::min(wall_hi_, p.x + 1.0);
-  double best = std::clamp(p.x, wall_lo_, wall_hi_), best_gap = gap(best);
-  for (double x = from; x <= to; x += kStep) {
-    const double g = gap(x);
+  const double reach = 1 + 2 * r_;
+  const double from = std::max(wall_lo_, p.x - reach), to = std::min(wall_hi_, p.x + reach);
+  std::vector<double> xs, gaps;
+  for (double x = from; x < to; x += kStep) xs.push_back(x);
+  xs.push_back(to);
+  for (const double x : xs) gaps.push_back(gap(x));
+  double best = xs.front(), best_gap = gaps.front();
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    const bool minimum = (i == 0 || gaps[i] <= gaps[i - 1]) && (i + 1 == xs.size() || gaps[i] <= gaps[i + 1]);
+    if (!minimum || !std::isfinite(gaps[i])) continue;
+    double a = xs[i > 0 ? i - 1 : i], b = xs[i + 1 < xs.size() ? i + 1 : i];
+    const double golden = 0.5 * (std::sqrt(5.0) - 1);
+    double c = b - golden * (b - a), d = a + golden * (b - a), fc = gap(c), fd = gap(d);
+    for (int k = 0; k < 60 && b > a; ++k) {
+      if (fc < fd) {
+        b = d;
+        d = c;
+        fd = fc;
+        c = b - golden * (b - a);
+        fc = gap(c);
+      } else {
+        a = c;
+        c = d;
+        fc = fd;
+        d = a + golden * (b - a);
+        fd = gap(d);
+      }
+    }
+    const double x = 0.5 * (a + b), g = std::min(gaps[i], gap(x));
     if (g < best_gap) {
-      best = x;
       best_gap = g;
+      best = g == gaps[i] ? xs[i] : x;
     }
   }
-  double a = std::max(wall_lo_, best - kStep), b = std::min(wall_hi_, best + kStep);
-  const double golden = 0.5 * (std::sqrt(5.0) - 1);
-  double c = b - golden * (b - a), d = a + golden * (b - a), fc = gap(c), fd = gap(d);
-  for (int i = 0; i < 60; ++i) {
-    if (fc < fd) {
-      b = d;
-      d = c;
-      fd = fc;
-      c = b - golden * (b - a);
-      fc = gap(c);
-    } else {
-      a = c;
-      c = d;
-      fc = fd;
-      d = a + golden * (b - a);
-      fd = gap(d);
-    }
-  }
-  const double x = 0.5 * (a + b);
-  if (gap_mm) *gap_mm = gap(x);
-  return x;
+  if (gap_mm) *gap_mm = best_gap;
+  return best;
 }
 
 bool TearMeniscus::on_surface(const Point3& head_point) const {

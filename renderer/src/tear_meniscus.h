@@ -29,7 +29,8 @@
 // must vanish, found by scanning for sign changes and refining them. Where
 // the centre line bends tighter than r (over the limbus's edge) the
 // circles' surface folds through itself: a highlight inside another
-// circle's sphere is inside the tears and is dropped.
+// circle's sphere lies on a fold in the air, not on the tears, and is
+// dropped.
 //
 // Left out: the light the tears refract (what lies under them is drawn as
 // if dry), the meniscus's thinning toward the canthi (it ends at 90% of
@@ -66,8 +67,8 @@ class TearMeniscus {
   double radius_mm() const { return r_; }
 
   // Every highlight of a point light at `source` seen from `target`
-  // (world): reflections with status ok (on_cap false), in order along the
-  // lid from head-frame -x.
+  // (world): reflections with status ok (on_cap false), in order of their
+  // points' head-frame x.
   std::vector<Reflection> highlights(const Point3& source, const Point3& target) const;
   // The highlight nearest `near` (a highlight's point, found again within
   // 0.5 mm along the lid) for a source or target moved a little: status
@@ -85,7 +86,7 @@ class TearMeniscus {
   Reflection highlight_at(double x, const Point3& source, const Point3& target) const;
   Reflection refine(double a, double b, double fa, const Point3& source, const Point3& target) const;
   // The wall's x of the circle through a head-frame point near the pipe:
-  // the centre line's nearest point, within 1 mm of p's x; `gap_mm`, if
+  // the centre line's nearest point, within 1 + 2r of p's x; `gap_mm`, if
   // given, gets its distance.
   double wall_x_of(const Point3& p, double* gap_mm = nullptr) const;
   // Whether a head-frame point on some circle is on the tears' surface:

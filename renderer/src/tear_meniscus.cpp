@@ -33,6 +33,30 @@ constexpr double kFissureReach = 0.9;
 
 Vector3 unit(const Vector3& v) { return v / v.norm(); }
 
+// Where f is least on [a, b], by `steps` of golden-section search (f
+// unimodal there).
+template <class F>
+double golden_minimum(const F& f, double a, double b, int steps) {
+  const double golden = 0.5 * (std::sqrt(5.0) - 1);
+  double c = b - golden * (b - a), d = a + golden * (b - a), fc = f(c), fd = f(d);
+  for (int k = 0; k < steps && b > a; ++k) {
+    if (fc < fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - golden * (b - a);
+      fc = f(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + golden * (b - a);
+      fd = f(d);
+    }
+  }
+  return 0.5 * (a + b);
+}
+
 // The height Z above the head's xy plane where a sphere of radius r about
 // (X, Y, Z) touches the shell from outside, by sphere tracing down from
 // far in front: each step is the gap, which the shell's distance (1-Lipschitz)
@@ -287,25 +311,8 @@ double TearMeniscus::wall_x_of(const Point3& p, double* gap_mm) const {
   for (std::size_t i = 0; i < xs.size(); ++i) {
     const bool minimum = (i == 0 || gaps[i] <= gaps[i - 1]) && (i + 1 == xs.size() || gaps[i] <= gaps[i + 1]);
     if (!minimum || !std::isfinite(gaps[i])) continue;
-    double a = xs[i > 0 ? i - 1 : i], b = xs[i + 1 < xs.size() ? i + 1 : i];
-    const double golden = 0.5 * (std::sqrt(5.0) - 1);
-    double c = b - golden * (b - a), d = a + golden * (b - a), fc = gap(c), fd = gap(d);
-    for (int k = 0; k < 60 && b > a; ++k) {
-      if (fc < fd) {
-        b = d;
-        d = c;
-        fd = fc;
-        c = b - golden * (b - a);
-        fc = gap(c);
-      } else {
-        a = c;
-        c = d;
-        fc = fd;
-        d = a + golden * (b - a);
-        fd = gap(d);
-      }
-    }
-    const double x = 0.5 * (a + b), g = std::min(gaps[i], gap(x));
+    const double x = golden_minimum(gap, xs[i > 0 ? i - 1 : i], xs[i + 1 < xs.size() ? i + 1 : i], 60);
+    const double g = std::min(gaps[i], gap(x));
     if (g < best_gap) {
       best_gap = g;
       best = g == gaps[i] ? xs[i] : x;
@@ -396,25 +403,7 @@ ShellOffset eye_shell_offset(const Eye& eye, const Pose& world_from_head) {
     // distance is unimodal from outside a convex arc).
     const auto depth = [&](double q) { return q * q / (R + std::sqrt(R * R - k * q * q)); };
     const auto cap = [&](double q) { return (rho - q) * (rho - q) + (w - depth(q)) * (w - depth(q)); };
-    double a = 0, b = r_L;
-    const double g = 0.5 * (std::sqrt(5.0) - 1);
-    double c = b - g * (b - a), d = a + g * (b - a), fc = cap(c), fd = cap(d);
-    for (int i = 0; i < 80; ++i) {
-      if (fc < fd) {
-        b = d;
-        d = c;
-        fd = fc;
-        c = b - g * (b - a);
-        fc = cap(c);
-      } else {
-        a = c;
-        c = d;
-        fc = fd;
-        d = a + g * (b - a);
-        fd = cap(d);
-      }
-    }
-    const double q = 0.5 * (a + b);
+    const double q = golden_minimum(cap, 0.0, r_L, 80);
     consider(q, depth(q));
     if (seam > w_L) {
       consider(r_L, std::clamp(w, w_L, seam));  // the band

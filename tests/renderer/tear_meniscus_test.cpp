@@ -157,6 +157,24 @@ Scene wet_dark_face() {
   return scene;
 }
 
+// The distractors' plane (their share of each pixel's light).
+const ImagePlane& distractor_mask(const RenderResult& result) {
+  for (const NamedPlane& p : result.aovs) {
+    if (p.name == "distractor") return p.plane;
+  }
+  throw std::runtime_error("no distractor AOV");
+}
+
+// The light the distractors' plane gives the image, over the electrons
+// their labels give.
+double imaged_over_labelled(const RenderResult& result) {
+  const ImagePlane& mask = distractor_mask(result);
+  double labelled = 0, imaged = 0;
+  for (const GlintImage& d : result.distractors) labelled += d.electrons;
+  for (std::size_t i = 0; i < mask.values.size(); ++i) imaged += double(mask.values[i]) * result.electrons.values[i];
+  return imaged / labelled;
+}
+
 TEST(TearMeniscusHighlights, LieWhereTheLabelsSayWithTheirElectrons) {
   const Scene scene = wet_dark_face();
   RenderOptions options;
@@ -164,23 +182,14 @@ TEST(TearMeniscusHighlights, LieWhereTheLabelsSayWithTheirElectrons) {
   const RenderResult result = render(scene, 0, options);
   const std::vector<DistractorTruth>& truth = result.truth.views[0].distractors;
   ASSERT_EQ(truth.size(), result.distractors.size());
-  const ImagePlane* mask = nullptr;
-  for (const NamedPlane& p : result.aovs) {
-    if (p.name == "distractor") mask = &p.plane;
-  }
-  ASSERT_NE(mask, nullptr);
+  const ImagePlane* mask = &distractor_mask(result);
   const ImagePlane& e = result.electrons;
 
   // Every highlight's light in the image is what its label gives.
-  double labelled = 0, imaged = 0;
   int seen = 0;
-  for (std::size_t k = 0; k < truth.size(); ++k) {
-    labelled += result.distractors[k].electrons;
-    if (truth[k].kind == DistractorKind::tear_meniscus && truth[k].status == PathStatus::ok) ++seen;
-  }
-  for (std::size_t i = 0; i < e.values.size(); ++i) imaged += double(mask->values[i]) * e.values[i];
+  for (const DistractorTruth& d : truth) seen += d.kind == DistractorKind::tear_meniscus && d.status == PathStatus::ok;
   ASSERT_GE(seen, 2);
-  EXPECT_NEAR(imaged / labelled, 1, 1e-4);
+  EXPECT_NEAR(imaged_over_labelled(result), 1, 1e-4);
 
   // Each seen meniscus highlight's centroid (its mask's light within 4 px,
   // the point spread's reach) is its label's pixel; those alone there.
@@ -313,16 +322,8 @@ TEST(TearMeniscusHighlights, AMovingEyesHighlightsAreTheWholeExposures) {
   const RenderResult result = render(scene, 0, options);
   const std::vector<DistractorTruth>& truth = result.truth.views[0].distractors;
   ASSERT_EQ(truth.size(), result.distractors.size());
-  const ImagePlane* mask = nullptr;
-  for (const NamedPlane& p : result.aovs) {
-    if (p.name == "distractor") mask = &p.plane;
-  }
-  ASSERT_NE(mask, nullptr);
-  double labelled = 0, imaged = 0;
-  for (const GlintImage& d : result.distractors) labelled += d.electrons;
-  for (std::size_t i = 0; i < mask->values.size(); ++i) imaged += double(mask->values[i]) * result.electrons.values[i];
-  EXPECT_GT(labelled, 0);
-  EXPECT_NEAR(imaged / labelled, 1, 1e-3);
+  ASSERT_FALSE(truth.empty());
+  EXPECT_NEAR(imaged_over_labelled(result), 1, 1e-3);
   for (std::size_t k = 1; k < truth.size(); ++k) {
     EXPECT_LE(static_cast<int>(truth[k - 1].kind) * 100 + truth[k - 1].illuminator,
               static_cast<int>(truth[k].kind) * 100 + truth[k].illuminator);

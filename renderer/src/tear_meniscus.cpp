@@ -325,7 +325,7 @@ double TearMeniscus::wall_x_of(const Point3& p, double* gap_mm) const {
 bool TearMeniscus::on_surface(const Point3& head_point) const {
   // Where the centre line bends tighter than r (over the limbus's edge)
   // the circles' surface folds through itself: a point inside another
-  // circle's sphere is inside the tears, not on their surface.
+  // circle's sphere lies on a fold in the air, not on the tears.
   double gap = 0;
   wall_x_of(head_point, &gap);
   return gap >= r_ * (1 - 1e-9);

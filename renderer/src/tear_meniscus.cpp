@@ -33,6 +33,22 @@ constexpr double kFissureReach = 0.9;
 
 Vector3 unit(const Vector3& v) { return v / v.norm(); }
 
+// The wall at x: the margin's height and slope (a central difference) and
+// the wall's unit normal into the opening (+y), as build() and frame()
+// must both have them, to the bit.
+struct Wall {
+  double m = 0, m1 = 0, w = 1, nx = 0, ny = 1;
+};
+Wall wall_at(const std::function<double(double)>& margin, double x) {
+  Wall out;
+  out.m = margin(x);
+  out.m1 = (margin(x + kSlopeStepMm) - margin(x - kSlopeStepMm)) / (2 * kSlopeStepMm);
+  out.w = std::sqrt(1 + out.m1 * out.m1);
+  out.nx = -out.m1 / out.w;
+  out.ny = 1 / out.w;
+  return out;
+}
+
 // Where f is least on [a, b], by `steps` of golden-section search (f
 // unimodal there).
 template <class F>
@@ -101,11 +117,8 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
   std::vector<Vector3> to_centre(count, Vector3{0, 0, 0});
   for (int i = 0; i < count; ++i) {
     const double x = x_lo + i * step;
-    const double m = out.margin_(x);
-    const double m1 = (out.margin_(x + kSlopeStepMm) - out.margin_(x - kSlopeStepMm)) / (2 * kSlopeStepMm);
-    const double w = std::sqrt(1 + m1 * m1);
-    const double nx = -m1 / w, ny = 1 / w;  // as frame() computes them, to the bit
-    const double X = x + r * nx, Y = m + r * ny;
+    const Wall wall = wall_at(out.margin_, x);
+    const double X = x + r * wall.nx, Y = wall.m + r * wall.ny;
     centre_x[i] = X;
     z[i] = touching_height(shell, X, Y, r);
     if (z[i]) to_centre[i] = unit(shell(Point3{X, Y, *z[i]}));
@@ -154,12 +167,10 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
 TearMeniscus::Frame TearMeniscus::frame(double x) const {
   Frame f;
   if (!(x >= wall_lo_ && x <= wall_hi_)) return f;
-  const double m = margin_(x);
-  const double h = kSlopeStepMm, k = kCurvatureStepMm;
-  const double m1 = (margin_(x + h) - margin_(x - h)) / (2 * h);
+  const Wall wall = wall_at(margin_, x);
+  const double m = wall.m, m1 = wall.m1, w = wall.w, nx = wall.nx, ny = wall.ny;
+  const double k = kCurvatureStepMm;
   const double m2 = (margin_(x + k) - 2 * m + margin_(x - k)) / (k * k);
-  const double w = std::sqrt(1 + m1 * m1);
-  const double nx = -m1 / w, ny = 1 / w;  // the wall's normal, into the opening (+y)
   const double X = x + r_ * nx;
   // The spline on [X_i, X_i+1].
   const int n = static_cast<int>(z_.size());
@@ -331,10 +342,10 @@ bool TearMeniscus::on_surface(const Point3& head_point) const {
   return gap >= r_ * (1 - 1e-9);
 }
 
-Reflection TearMeniscus::highlight_near(const Point3& near, const Point3& source_world,
-                                        const Point3& target_world) const {
+double TearMeniscus::circle_of(const Point3& world_point) const { return wall_x_of(head_from_world_ * world_point); }
+
+Reflection TearMeniscus::highlight_near(double x0, const Point3& source_world, const Point3& target_world) const {
   const Point3 source = head_from_world_ * source_world, target = head_from_world_ * target_world;
-  const double x0 = wall_x_of(head_from_world_ * near);
   double along = 0;
   const auto F = [&](double x) -> std::optional<double> {
     const Frame f = frame(x);
@@ -360,8 +371,11 @@ GlintRadiometry meniscus_highlight_radiometry(const TearMeniscus& meniscus, cons
                                               const Camera& camera, const Reflection& highlight) {
   check_radiometry_inputs(light, camera);
   if (highlight.status != PathStatus::ok) return failed_radiometry(highlight.status);
+  // Its circle, once: every neighbour the differences ask for is sought
+  // from there.
+  const double circle = meniscus.circle_of(highlight.point);
   const Mirror mirror = [&](const Point3& source, const Point3& target) {
-    return meniscus.highlight_near(highlight.point, source, target);
+    return meniscus.highlight_near(circle, source, target);
   };
   // The highlight as the meniscus itself finds it: a label from elsewhere
   // (or another meniscus) has no radiometry here.

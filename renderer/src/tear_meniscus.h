@@ -70,10 +70,14 @@ class TearMeniscus {
   // (world): reflections with status ok (on_cap false), in order of their
   // points' head-frame x.
   std::vector<Reflection> highlights(const Point3& source, const Point3& target) const;
-  // The highlight nearest `near` (a highlight's point, found again within
-  // 0.5 mm along the lid) for a source or target moved a little: status
-  // no_solution when none is there.
-  Reflection highlight_near(const Point3& near, const Point3& source, const Point3& target) const;
+  // Where along the lid a world point near the meniscus lies: the wall's
+  // x of the circle through it (the centre line's nearest point, within
+  // 1 + 2r of the point's own x).
+  double circle_of(const Point3& world_point) const;
+  // The highlight nearest the circle at `wall_x` (circle_of a highlight's
+  // point; found again within 0.5 mm along the lid) for a source or target
+  // moved a little: status no_solution when none is there.
+  Reflection highlight_near(double wall_x, const Point3& source, const Point3& target) const;
 
  private:
   TearMeniscus() = default;
@@ -85,9 +89,8 @@ class TearMeniscus {
   double theta_at(const Frame& f, const Point3& source, const Point3& target, double& along) const;
   Reflection highlight_at(double x, const Point3& source, const Point3& target) const;
   Reflection refine(double a, double b, double fa, const Point3& source, const Point3& target) const;
-  // The wall's x of the circle through a head-frame point near the pipe:
-  // the centre line's nearest point, within 1 + 2r of p's x; `gap_mm`, if
-  // given, gets its distance.
+  // circle_of for a head-frame point; `gap_mm`, if given, gets its
+  // distance from the centre line.
   double wall_x_of(const Point3& p, double* gap_mm = nullptr) const;
   // Whether a head-frame point on some circle is on the tears' surface:
   // no other circle's sphere holds it.

@@ -90,7 +90,7 @@ TEST(TearMeniscus, MirrorsTheLightWhereTheLawOfReflectionHoldsOnTheFillet) {
     EXPECT_NEAR(std::cos(r.incidence_rad), dot(r.normal, r.reflected), 1e-12);
     EXPECT_NEAR(dot(r.normal, -r.incident.vector()), dot(r.normal, r.reflected), 1e-12);
     // Found again from nearby.
-    const Reflection again = meniscus.highlight_near(r.point + Vector3{0.2, 0, 0}, source, target);
+    const Reflection again = meniscus.highlight_near(meniscus.circle_of(r.point + Vector3{0.2, 0, 0}), source, target);
     EXPECT_LT(distance(again.point, r.point), 1e-10);
   }
 }
@@ -269,7 +269,7 @@ TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactF
       EXPECT_LT((n - bisector / bisector.norm()).norm(), 1e-6) << r.point.x;
       // Found again from its own point when the target moves a little (as
       // the radiometry's differences move it), close by.
-      const Reflection again = meniscus.highlight_near(r.point, source, target + Vector3{0.01, 0.01, 0});
+      const Reflection again = meniscus.highlight_near(meniscus.circle_of(r.point), source, target + Vector3{0.01, 0.01, 0});
       ASSERT_EQ(again.status, PathStatus::ok) << r.point.x;
       EXPECT_LT(distance(again.point, r.point), 0.05) << r.point.x;
     }

@@ -198,6 +198,10 @@ json distractor_json(const DistractorTruth& d, const Scene& scene, const Camera&
   out["kind"] = to_string(d.kind);
   out["illuminator"] = d.illuminator;
   out["illuminator_name"] = scene.illuminators.at(d.illuminator).name;
+  if (d.spectacle_lens >= 0) {
+    out["spectacle_lens"] = d.spectacle_lens;
+    out["spectacle_lens_name"] = scene.spectacle_lenses.at(d.spectacle_lens).name;
+  }
   out["status"] = to_string(d.status);
   if (d.status == PathStatus::occluded) out["occluded_by"] = to_string(d.occluder);
   pixel_fields(out, pixel_valid(d.status, camera, r.point), d.pixel);
@@ -277,8 +281,9 @@ json view_json(const EyeInCameraTruth& v, const Scene& scene) {
   json glints = json::array();
   for (const GlintTruth& g : v.glints) glints.push_back(glint_json(g, scene, camera));
   out["glints"] = glints;
-  // Only for an eye with a tear film, whose sclera mirrors the lights.
-  if (scene.eyes.at(v.eye).appearance().tear_film) {
+  // Only for an eye with a tear film, whose sclera mirrors the lights, or
+  // in a scene with spectacle lenses, which mirror them.
+  if (scene.eyes.at(v.eye).appearance().tear_film || !scene.spectacle_lenses.empty()) {
     json distractors = json::array();
     for (const DistractorTruth& d : v.distractors) distractors.push_back(distractor_json(d, scene, camera));
     out["distractors"] = distractors;

@@ -534,6 +534,152 @@ Refraction solve_refraction(const Eye& eye, const Point3& inner_w, const Point3&
   return out;
 }
 
+namespace {
+
+// A spectacle lens's surfaces in its own frame (spectacle_lens.h): the
+// solver's conicoids with their apices on the lens axis, curving away
+// from +z as the cornea's do from the eye's +z.
+struct LensFrame {
+  Pose lens_from_world;
+  Surface front, back;
+  double n = 1;
+
+  explicit LensFrame(const SpectacleLens& lens)
+      : lens_from_world(lens.world_from_lens.inverse()),
+        front{0.0, Conicoid{lens.front_radius_mm, 0.0}},
+        back{-lens.center_thickness_mm, Conicoid{lens.back_radius_mm, 0.0}},
+        n(lens.refractive_index) {}
+  Vector3 local(const Point3& world) const { return (lens_from_world * world).from_origin(); }
+  // In front of the lens: outside both spheres; behind it: inside both.
+  bool in_front(const Vector3& p) const { return front.implicit(p) > 0 && back.implicit(p) > 0; }
+  bool behind(const Vector3& p) const { return front.implicit(p) < 0 && back.implicit(p) < 0; }
+};
+
+Point3 lens_world(const SpectacleLens& lens, const Vector3& p) {
+  return lens.world_from_lens * (Point3::origin() + p);
+}
+
+// A chart point on a lens surface, inside the outline.
+bool lens_chart_point(const SpectacleLens& lens, const Surface& s, double x, double y, Vector3& out) {
+  ChartPoint c;
+  if (!chart_point(s, x, y, c)) return false;
+  out = c.X;
+  return inside_outline(lens, Point3::origin() + c.X);
+}
+
+}  // namespace
+
+LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from_w, const Point3& to_w) {
+  LensPassage out;
+  const LensFrame f(lens);
+  const Vector3 from = f.local(from_w), to = f.local(to_w);
+  if (!from.is_finite() || !to.is_finite() || !((f.in_front(from) && f.behind(to)) ||
+                                                (f.in_front(to) && f.behind(from)))) {
+    out.status = PathStatus::invalid_input;
+    return out;
+  }
+  const bool from_in_front = f.in_front(from);
+  const Vector3& outer = from_in_front ? from : to;
+  const Vector3& inner = from_in_front ? to : from;
+  // Start where the straight segment crosses the surfaces.
+  Vector3 h1, h2;
+  if (!segment_hits(f.front, outer, inner, h1) || !segment_hits(f.back, outer, inner, h2)) return out;
+  const std::array<double, 2> c1 = chart_start(f.front, h1), c2 = chart_start(f.back, h2);
+  std::array<double, 4> xy{c1[0], c1[1], c2[0], c2[1]};
+  if (!solve_chain<2>({f.front, f.back}, outer, inner, {1.0, f.n, 1.0}, xy, out.iterations)) {
+    out.status = PathStatus::not_converged;
+    return out;
+  }
+  Vector3 x1, x2;
+  if (!lens_chart_point(lens, f.front, xy[0], xy[1], x1) || !lens_chart_point(lens, f.back, xy[2], xy[3], x2)) {
+    return out;  // through the edge: no_solution
+  }
+  // Each surface crossed from its outer side inward (toward -z).
+  const Vector3 n1 = f.front.normal(x1), n2 = f.back.normal(x2);
+  if (!(dot(x1 - outer, n1) < 0) || !(dot(x2 - x1, n1) < 0) || !(dot(x2 - x1, n2) < 0) ||
+      !(dot(inner - x2, n2) < 0)) {
+    return out;
+  }
+  const Point3 p1 = lens_world(lens, x1), p2 = lens_world(lens, x2);
+  out.first = from_in_front ? p1 : p2;
+  out.second = from_in_front ? p2 : p1;
+  out.leaving = UnitVector3::normalize(out.first - from_w);
+  out.arriving = UnitVector3::normalize(to_w - out.second);
+  out.status = PathStatus::ok;
+  return out;
+}
+
+LensReflection solve_lens_reflection(const SpectacleLens& lens, LensSurface surface, const Point3& source_w,
+                                     const Point3& target_w) {
+  LensReflection out;
+  out.surface = surface;
+  const LensFrame f(lens);
+  const Vector3 source = f.local(source_w), target = f.local(target_w);
+  if (!source.is_finite() || !target.is_finite() || !f.in_front(source) || !f.in_front(target)) {
+    out.status = PathStatus::invalid_input;
+    return out;
+  }
+  const Point3 front_centre = lens_world(lens, {0, 0, -lens.front_radius_mm});
+  const Point3 back_centre = lens_world(lens, {0, 0, -lens.center_thickness_mm - lens.back_radius_mm});
+  if (surface == LensSurface::front) {
+    // A convex mirror: the sphere's solution, on the cap within the outline.
+    out.mirror = solve_sphere_reflection(front_centre, lens.front_radius_mm, source_w, target_w);
+    if (out.mirror.status != PathStatus::ok) {
+      out.status = out.mirror.status;
+      return out;
+    }
+    const Point3 p = f.lens_from_world * out.mirror.point;
+    if (!(p.z > -lens.front_radius_mm) || !inside_outline(lens, p)) return out;
+    out.entry = out.exit = out.mirror.point;
+    out.from_source = out.mirror.incident;
+    out.to_target = out.mirror.reflected;
+    out.status = PathStatus::ok;
+    return out;
+  }
+  // The back surface: target -> front (x1) -> back (q) -> front (x3) ->
+  // source, started from the back sphere's own mirror point as if the
+  // glass did not bend the light.
+  const Reflection guess = solve_sphere_reflection(back_centre, lens.back_radius_mm, source_w, target_w);
+  const Vector3 q0 = guess.status == PathStatus::ok ? f.local(guess.point) : Vector3{0, 0, -lens.center_thickness_mm};
+  Vector3 h1, h3;
+  if (!segment_hits(f.front, target, q0, h1) || !segment_hits(f.front, source, q0, h3)) return out;
+  const std::array<double, 2> c1 = chart_start(f.front, h1), cq = chart_start(f.back, q0),
+                              c3 = chart_start(f.front, h3);
+  std::array<double, 6> xy{c1[0], c1[1], cq[0], cq[1], c3[0], c3[1]};
+  int iterations = 0;
+  if (!solve_chain<3>({f.front, f.back, f.front}, target, source, {1.0, f.n, f.n, 1.0}, xy, iterations)) {
+    out.mirror.iterations = iterations;
+    out.status = PathStatus::not_converged;
+    return out;
+  }
+  Vector3 x1, q, x3;
+  if (!lens_chart_point(lens, f.front, xy[0], xy[1], x1) || !lens_chart_point(lens, f.back, xy[2], xy[3], q) ||
+      !lens_chart_point(lens, f.front, xy[4], xy[5], x3)) {
+    return out;
+  }
+  // In through the front, mirrored on the glass's side of the back, out
+  // through the front.
+  const Vector3 n1 = f.front.normal(x1), nq = f.back.normal(q), n3 = f.front.normal(x3);
+  if (!(dot(x1 - target, n1) < 0) || !(dot(q - x1, n1) < 0) || !(dot(x1 - q, nq) > 0) || !(dot(x3 - q, nq) > 0) ||
+      !(dot(x3 - q, n3) > 0) || !(dot(source - x3, n3) > 0)) {
+    return out;
+  }
+  Reflection& m = out.mirror;
+  m.point = lens_world(lens, q);
+  m.normal = UnitVector3::normalize(lens.world_from_lens * nq);
+  m.incident = UnitVector3::normalize(lens.world_from_lens * (q - x3));
+  m.reflected = UnitVector3::normalize(lens.world_from_lens * (x1 - q));
+  m.incidence_rad = angle_between(-m.incident.vector(), m.normal);
+  m.iterations = iterations;
+  m.status = PathStatus::ok;
+  out.entry = lens_world(lens, x3);
+  out.exit = lens_world(lens, x1);
+  out.from_source = UnitVector3::normalize(out.entry - source_w);
+  out.to_target = UnitVector3::normalize(target_w - out.exit);
+  out.status = PathStatus::ok;
+  return out;
+}
+
 double reflection_residual_rad(const Reflection& r) {
   const Vector3 d = r.incident.vector();
   const Vector3 n = r.normal.vector();

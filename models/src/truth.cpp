@@ -1,6 +1,7 @@
 #include "purkinje/models/truth.h"
 
 #include <cmath>
+#include <vector>
 
 namespace purkinje {
 namespace {
@@ -23,6 +24,104 @@ PathStatus image_of(PathStatus path, const Point3& point, const Camera& camera, 
   return PathStatus::no_solution;
 }
 
+// A path's leg from a point on the eye to an end outside it (a camera or
+// a light): straight, or through the spectacle lens its straight segment
+// crosses (the first one listed, when several do).
+struct Leg {
+  PathStatus status = PathStatus::ok;
+  Point3 aim;            // the end, or a point along the leg's first segment as far away
+  Point3 last;           // the leg's last corner before the end: the start when straight
+  std::vector<Point3> corners;  // where it crosses the lens's surfaces, in order
+};
+
+Leg leg_to(const Scene& scene, const Point3& from, const Point3& end) {
+  Leg out;
+  out.aim = end;
+  out.last = from;
+  for (const SpectacleLens& lens : scene.spectacle_lenses) {
+    if (!segment_crosses_lens(lens, from, end)) continue;
+    const LensPassage p = solve_lens_passage(lens, from, end);
+    // Ends on one side with the segment grazing through the glass: no path.
+    out.status = p.status == PathStatus::invalid_input ? PathStatus::no_solution : p.status;
+    if (p.status != PathStatus::ok) return out;
+    out.aim = from + p.leaving * distance(from, end);
+    out.last = p.second;
+    out.corners = {p.first, p.second};
+    return out;
+  }
+  return out;
+}
+
+bool path_exists(PathStatus s) { return s == PathStatus::ok || s == PathStatus::off_cornea; }
+
+// The eye's own solver, run with its far ends moved to the legs' aims:
+// at its fixed point the path obeys the eye's law with the directions in
+// which its legs leave through the lenses, which is the whole path's law.
+// A lens a dozen millimetres from the eye turns a leg's direction by about
+// 1e-3 of a change in the eye's point, so the iteration contracts fast.
+// `solve(light_aim, camera_aim)` returns the eye's path, `point_of` its
+// point where the legs start; `light` is absent for a refracted path.
+template <class Path, class Solve, class PointOf>
+Path through_lenses(const Scene& scene, const Point3* light, const Point3& camera, const Solve& solve,
+                    const PointOf& point_of, Leg& camera_leg, Leg& light_leg) {
+  const Point3& light_end = light ? *light : camera;
+  const auto legs_from = [&](const Path& p) {
+    camera_leg = leg_to(scene, point_of(p), camera);
+    light_leg = light ? leg_to(scene, point_of(p), *light) : Leg{PathStatus::ok, camera, point_of(p), {}};
+    for (const Leg* leg : {&camera_leg, &light_leg}) {
+      if (leg->status != PathStatus::ok) return leg->status;
+    }
+    return PathStatus::ok;
+  };
+  const auto straight = [&] { return camera_leg.corners.empty() && light_leg.corners.empty(); };
+  Path path = solve(light_end, camera);
+  camera_leg = light_leg = {PathStatus::ok, camera, point_of(path), {}};
+  light_leg.aim = light_end;
+  if (scene.spectacle_lenses.empty() || !path_exists(path.status)) return path;
+  constexpr double kToleranceMm = 1e-11;
+  for (int i = 0; i < 100; ++i) {
+    if (const PathStatus s = legs_from(path); s != PathStatus::ok) {
+      path.status = s;
+      return path;
+    }
+    if (straight()) {
+      if (i == 0) return path;  // no lens in the way
+      // The iteration left the lens (its edge lies between the eye's
+      // point and an end): the straight path, if it misses the lens.
+      path = solve(light_end, camera);
+      if (!path_exists(path.status)) return path;
+      if (const PathStatus s = legs_from(path); s != PathStatus::ok) {
+        path.status = s;
+      } else if (!straight()) {
+        path.status = PathStatus::no_solution;
+      }
+      return path;
+    }
+    const Point3 point = point_of(path);
+    Path next = solve(light_leg.aim, camera_leg.aim);
+    if (!path_exists(next.status)) return next;
+    const bool converged = distance(point_of(next), point) <= kToleranceMm;
+    path = next;
+    if (converged) {
+      if (const PathStatus s = legs_from(path); s != PathStatus::ok) path.status = s;
+      return path;
+    }
+  }
+  path.status = PathStatus::not_converged;
+  return path;
+}
+
+// What the scene's occlusion finds along a leg from `from` to `end`.
+Occluder occluder_along(const TruthOptions& options, const Point3& from, const Leg& leg, const Point3& end) {
+  if (!options.occluded) return Occluder::none;
+  Point3 a = from;
+  for (const Point3& b : leg.corners) {
+    if (const Occluder o = options.occluded(a, b); o != Occluder::none) return o;
+    a = b;
+  }
+  return options.occluded(a, end);
+}
+
 }  // namespace
 
 const char* to_string(Occluder o) {
@@ -40,37 +139,139 @@ const char* to_string(DistractorKind kind) {
   switch (kind) {
     case DistractorKind::sclera: return "sclera";
     case DistractorKind::tear_meniscus: return "tear_meniscus";
+    case DistractorKind::spectacle_lens_front: return "spectacle_lens_front";
+    case DistractorKind::spectacle_lens_back: return "spectacle_lens_back";
   }
   return "unknown";
 }
 
-DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
-                                 const Eye& eye, int light, const Camera& camera, const TruthOptions& options) {
+namespace {
+
+// A mirror's highlight through the scene's lenses: the path, its legs, and
+// its pixel and status as the camera sees it (before occlusion).
+struct SeenReflection {
+  Reflection reflection;
+  Leg camera_leg, light_leg;
+  PathStatus status = PathStatus::no_solution;
+  Pixel pixel;
+};
+
+SeenReflection straight_reflection(const Reflection& r, const Camera& camera, const Point3& light) {
+  SeenReflection out;
+  out.reflection = r;
+  out.camera_leg = {PathStatus::ok, camera.center(), r.point, {}};
+  out.light_leg = {PathStatus::ok, light, r.point, {}};
+  out.status = image_of(r.status, r.point, camera, out.pixel);
+  return out;
+}
+
+DistractorTruth seen_distractor(DistractorKind kind, const SeenReflection& h, const Scene& scene, const Eye& eye,
+                                int light, const Camera& camera, const TruthOptions& options) {
   DistractorTruth d;
   d.kind = kind;
   d.illuminator = light;
-  d.reflection = highlight;
-  d.status = image_of(highlight.status, highlight.point, camera, d.pixel);
+  d.reflection = h.reflection;
+  d.pixel = h.pixel;
+  d.status = h.status;
   if (d.status == PathStatus::ok) {
     // The cornea stands out of the sclera's sphere: it can hide a
     // highlight near the limbus. What the camera sees in front of the
     // highlight comes first, then what shadows it (as for glints).
-    const auto blocker = [&](const Point3& end) {
-      if (eye.cap_crosses(highlight.point, end)) return Occluder::eye;
-      return options.occluded ? options.occluded(highlight.point, end) : Occluder::none;
+    const auto blocker = [&](const Leg& leg, const Point3& end) {
+      const Point3& first = leg.corners.empty() ? end : leg.corners.front();
+      if (eye.cap_crosses(h.reflection.point, first)) return Occluder::eye;
+      return occluder_along(options, h.reflection.point, leg, end);
     };
-    d.occluder = blocker(camera.center());
-    if (d.occluder == Occluder::none) d.occluder = blocker(scene.illuminators.at(light).position);
+    d.occluder = blocker(h.camera_leg, camera.center());
+    if (d.occluder == Occluder::none) d.occluder = blocker(h.light_leg, scene.illuminators.at(light).position);
     if (d.occluder != Occluder::none) d.status = PathStatus::occluded;
   }
   return d;
 }
 
-RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
+}  // namespace
+
+DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
+                                 const Eye& eye, int light, const Camera& camera, const TruthOptions& options) {
+  const Point3& light_position = scene.illuminators.at(light).position;
+  return seen_distractor(kind, straight_reflection(highlight, camera, light_position), scene, eye, light, camera,
+                         options);
+}
+
+namespace {
+
+RefractedImage refracted_image(const Scene& scene, const Eye& eye, const Camera& camera, const Point3& inner,
+                               Leg& camera_leg) {
   RefractedImage out;
-  out.path = solve_refraction(eye, inner, camera.center());
-  out.status = image_of(out.path.status, out.path.anterior_point, camera, out.pixel);
+  Leg no_light;
+  out.path = through_lenses<Refraction>(
+      scene, nullptr, camera.center(), [&](const Point3&, const Point3& aim) { return solve_refraction(eye, inner, aim); },
+      [](const Refraction& r) { return r.anterior_point; }, camera_leg, no_light);
+  out.status = image_of(out.path.status, camera_leg.last, camera, out.pixel);
   return out;
+}
+
+template <class Mirror>
+SeenReflection seen_reflection(const Scene& scene, const Camera& camera, const Point3& light, const Mirror& mirror) {
+  SeenReflection out;
+  out.reflection = through_lenses<Reflection>(
+      scene, &light, camera.center(), mirror, [](const Reflection& r) { return r.point; }, out.camera_leg,
+      out.light_leg);
+  out.status = image_of(out.reflection.status, out.camera_leg.last, camera, out.pixel);
+  return out;
+}
+
+// The occluder of a highlight the camera would see: what it sees in front
+// of it first, then what shadows it from its light.
+Occluder highlight_occluder(const TruthOptions& options, const SeenReflection& h, const Point3& camera,
+                            const Point3& light) {
+  const Occluder o = occluder_along(options, h.reflection.point, h.camera_leg, camera);
+  return o != Occluder::none ? o : occluder_along(options, h.reflection.point, h.light_leg, light);
+}
+
+// The eye a spectacle lens sits in front of: the one whose corneal apex is
+// nearest its back vertex.
+int eye_behind(const Scene& scene, const SpectacleLens& lens) {
+  const Point3 back = lens.world_from_lens * Point3{0, 0, -lens.center_thickness_mm};
+  int best = -1;
+  double nearest = 0;
+  for (int e = 0; e < static_cast<int>(scene.eyes.size()); ++e) {
+    const double d = distance(scene.eyes[e].corneal_apex(), back);
+    if (best < 0 || d < nearest) {
+      best = e;
+      nearest = d;
+    }
+  }
+  return best;
+}
+
+// A ghost's label: where the camera sees it, and whether it does.
+DistractorTruth ghost_truth(const Scene& scene, int lens, const LensReflection& g, int light, const Camera& camera,
+                            const TruthOptions& options) {
+  DistractorTruth d;
+  d.kind = g.surface == LensSurface::front ? DistractorKind::spectacle_lens_front : DistractorKind::spectacle_lens_back;
+  d.illuminator = light;
+  d.spectacle_lens = lens;
+  d.reflection = g.mirror;
+  d.status = image_of(g.status, g.exit, camera, d.pixel);
+  if (d.status == PathStatus::ok && options.occluded) {
+    const Point3& light_position = scene.illuminators.at(light).position;
+    d.occluder = options.occluded(g.exit, camera.center());
+    if (d.occluder == Occluder::none) d.occluder = options.occluded(g.entry, light_position);
+    if (d.occluder != Occluder::none) d.status = PathStatus::occluded;
+  }
+  return d;
+}
+
+}  // namespace
+
+RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
+  return image_through_cornea(Scene{}, eye, camera, inner);
+}
+
+RefractedImage image_through_cornea(const Scene& scene, const Eye& eye, const Camera& camera, const Point3& inner) {
+  Leg leg;
+  return refracted_image(scene, eye, camera, inner, leg);
 }
 
 SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
@@ -94,22 +295,39 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
       view.camera = c;
       view.eye = e;
       for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
+        const Point3& light = scene.illuminators[l].position;
+        const SeenReflection seen = seen_reflection(
+            scene, camera, light, [&](const Point3& source, const Point3& target) { return solve_reflection(eye, source, target); });
         GlintTruth g;
         g.illuminator = l;
-        g.reflection = solve_reflection(eye, scene.illuminators[l].position, camera.center());
-        g.status = image_of(g.reflection.status, g.reflection.point, camera, g.pixel);
-        if (g.status == PathStatus::ok && options.occluded) {
-          g.occluder = options.occluded(g.reflection.point, camera.center());
-          if (g.occluder == Occluder::none) g.occluder = options.occluded(g.reflection.point, scene.illuminators[l].position);
+        g.reflection = seen.reflection;
+        g.pixel = seen.pixel;
+        g.status = seen.status;
+        if (g.status == PathStatus::ok) {
+          g.occluder = highlight_occluder(options, seen, camera.center(), light);
           if (g.occluder != Occluder::none) g.status = PathStatus::occluded;
         }
         view.glints.push_back(g);
       }
       if (eye.appearance().tear_film) {
         for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
-          const Reflection r = solve_scleral_reflection(eye, scene.illuminators[l].position, camera.center());
-          if (r.status != PathStatus::ok) continue;
-          view.distractors.push_back(distractor_truth(DistractorKind::sclera, r, scene, eye, l, camera, options));
+          const SeenReflection seen =
+              seen_reflection(scene, camera, scene.illuminators[l].position, [&](const Point3& source, const Point3& target) {
+                return solve_scleral_reflection(eye, source, target);
+              });
+          if (seen.reflection.status != PathStatus::ok) continue;
+          view.distractors.push_back(seen_distractor(DistractorKind::sclera, seen, scene, eye, l, camera, options));
+        }
+      }
+      for (int k = 0; k < static_cast<int>(scene.spectacle_lenses.size()); ++k) {
+        const SpectacleLens& lens = scene.spectacle_lenses[k];
+        if (eye_behind(scene, lens) != e) continue;
+        for (const LensSurface surface : {LensSurface::front, LensSurface::back}) {
+          for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
+            const LensReflection g = solve_lens_reflection(lens, surface, scene.illuminators[l].position, camera.center());
+            if (g.status != PathStatus::ok) continue;
+            view.distractors.push_back(ghost_truth(scene, k, g, l, camera, options));
+          }
         }
       }
       std::vector<Pixel> ok_pixels, visible_pixels;
@@ -117,13 +335,14 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         PupilBorderPointTruth b;
         b.angle_rad = kTwoPi * k / options.pupil_border_points;
         b.border_point = eye.pupil_border_point(b.angle_rad);
-        const RefractedImage img = image_through_cornea(eye, camera, b.border_point);
+        Leg leg;
+        const RefractedImage img = refracted_image(scene, eye, camera, b.border_point, leg);
         b.status = img.status;
         b.pixel = img.pixel;
         b.refraction = img.path;
         if (b.status == PathStatus::ok) {
           ok_pixels.push_back(b.pixel);
-          if (options.occluded) b.occluder = options.occluded(b.refraction.anterior_point, camera.center());
+          b.occluder = occluder_along(options, b.refraction.anterior_point, leg, camera.center());
           if (b.occluder != Occluder::none) {
             b.status = PathStatus::occluded;
           } else {
@@ -144,10 +363,12 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
         view.pupil.visible_ellipse_valid = true;
         view.pupil.visible_ellipse = *ellipse;
       }
-      const RefractedImage centre = image_through_cornea(eye, camera, eye.pupil_center());
+      Leg centre_leg;
+      const RefractedImage centre = refracted_image(scene, eye, camera, eye.pupil_center(), centre_leg);
       view.pupil.refracted_center_status = centre.status;
-      if (centre.status == PathStatus::ok && options.occluded) {
-        view.pupil.refracted_center_occluder = options.occluded(centre.path.anterior_point, camera.center());
+      if (centre.status == PathStatus::ok) {
+        view.pupil.refracted_center_occluder =
+            occluder_along(options, centre.path.anterior_point, centre_leg, camera.center());
         if (view.pupil.refracted_center_occluder != Occluder::none) {
           view.pupil.refracted_center_status = PathStatus::occluded;
         }

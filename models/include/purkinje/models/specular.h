@@ -10,6 +10,7 @@
 
 #include "purkinje/models/eye.h"
 #include "purkinje/models/geometry.h"
+#include "purkinje/models/spectacle_lens.h"
 
 namespace purkinje {
 
@@ -72,6 +73,43 @@ Reflection solve_scleral_reflection(const Eye& eye, const Point3& source, const 
 // Snell's law at the anterior cornea, and also at the posterior cornea when
 // the eye model has one. `inner` must lie inside the aqueous humour.
 Refraction solve_refraction(const Eye& eye, const Point3& inner, const Point3& outer);
+
+// Light from `from` to `to` through both surfaces of a spectacle lens, one
+// end in front of it (outside the front surface's sphere), the other behind
+// it (inside the back surface's sphere), either way round.
+struct LensPassage {
+  // ok; no_solution (the path would cross a surface outside the outline,
+  // or there is none); not_converged; invalid_input (the ends not on
+  // opposite sides, or not finite).
+  PathStatus status = PathStatus::no_solution;
+  Point3 first, second;  // where the path crosses the lens's surfaces, `from`'s side first
+  UnitVector3 leaving = UnitVector3::unit_z();   // the direction in which the path leaves `from`
+  UnitVector3 arriving = UnitVector3::unit_z();  // and arrives at `to`
+  int iterations = 0;
+};
+LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from, const Point3& to);
+
+// Light from `source` mirrored by one surface of a spectacle lens toward
+// `target`, both in front of the lens: a ghost image of the light. The
+// back surface mirrors from inside the glass, the light crossing the front
+// surface on its way in and out.
+struct LensReflection {
+  // ok; no_solution (no mirror point inside the outline, or the path
+  // would cross the front surface outside it); not_converged;
+  // invalid_input (an end not in front of the lens, or not finite).
+  PathStatus status = PathStatus::no_solution;
+  LensSurface surface = LensSurface::front;
+  // At the mirroring surface (outward normal, toward +z of the lens);
+  // for the back surface its directions are those inside the glass.
+  Reflection mirror;
+  // Where the light crosses the front surface on its way in and out (the
+  // mirror point itself for the front surface).
+  Point3 entry, exit;
+  UnitVector3 from_source = UnitVector3::unit_z();  // in air, toward entry
+  UnitVector3 to_target = UnitVector3::unit_z();    // in air, from exit
+};
+LensReflection solve_lens_reflection(const SpectacleLens& lens, LensSurface surface, const Point3& source,
+                                     const Point3& target);
 
 // Residuals for tests and diagnostics (radians).
 // Angle between the reflected direction and the mirror image of the incident one.

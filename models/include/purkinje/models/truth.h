@@ -41,6 +41,8 @@ enum class DistractorKind {
   sclera,         // the tear film over the sclera (EyeAppearance::tear_film)
   tear_meniscus,  // the lower lid's tear meniscus (TearFilm::meniscus_radius_mm);
                   // found by the renderer, which builds the lid margins
+  spectacle_lens_front,  // a glasses lens's front surface (Scene::spectacle_lenses)
+  spectacle_lens_back,   // its back surface, seen through the front one
 };
 const char* to_string(DistractorKind kind);
 
@@ -56,8 +58,10 @@ struct DistractorTruth {
   // shell) stands in the way, else as GlintTruth's; what the camera sees
   // in front of it first, then what shadows it.
   Occluder occluder = Occluder::none;
-  Pixel pixel;            // where the mirror point projects (not behind the camera)
+  Pixel pixel;            // where the camera sees the mirror point (not behind the camera)
   Reflection reflection;  // on the mirror: point, its normal, directions
+  // For a spectacle lens's ghost: the lens's index in the scene.
+  int spectacle_lens = -1;
 };
 
 struct PupilBorderPointTruth {
@@ -95,7 +99,9 @@ struct EyeInCameraTruth {
   int eye = 0;
   std::vector<GlintTruth> glints;  // one per illuminator, in scene order
   // For an eye with a tear film: its scleral highlights, in illuminator
-  // order; empty otherwise.
+  // order; then the ghosts of the spectacle lenses in front of this eye
+  // (those whose back vertex lies nearer its corneal apex than any other
+  // eye's), by lens, surface (front, back) and illuminator.
   std::vector<DistractorTruth> distractors;
   PupilTruth pupil;
   Projection cornea_center;
@@ -140,13 +146,15 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options = {});
 DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
                                  const Eye& eye, int light, const Camera& camera, const TruthOptions& options);
 
-// Image of a point inside the eye seen through the cornea by `camera`.
+// Image of a point inside the eye seen through the cornea by `camera`, and
+// through any of the scene's spectacle lenses that the path crosses.
 struct RefractedImage {
   PathStatus status = PathStatus::no_solution;
   Pixel pixel;
   Refraction path;
 };
 RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner);
+RefractedImage image_through_cornea(const Scene& scene, const Eye& eye, const Camera& camera, const Point3& inner);
 
 // Direct least-squares ellipse fit (Halir and Flusser 1998). Needs at least
 // 6 points not on a conic degenerate; nullopt otherwise.

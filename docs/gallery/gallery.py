@@ -56,7 +56,8 @@ def entries():
         ("remote_face", "remote_face (bundled): both eyes, face, lids, lashes", load("remote_face"), None),
         ("remote", "remote (bundled): lid sphere in a wall", load("remote"), 60),
         ("headset", "headset (bundled): lid sphere", load("headset"), None),
-        ("remote_glasses", "remote_glasses (bundled): a glasses frame", load("remote_glasses"), 60),
+        ("remote_glasses", "remote_glasses (bundled): glasses, -3 D lenses in a frame; the eye seen through a lens, "
+         "each lens mirroring each LED off its front and its back (ghosts)", load("remote_glasses"), 90),
     ]
     h, r = "headset", "remote"
     drawn = [

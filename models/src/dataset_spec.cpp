@@ -275,6 +275,7 @@ struct Reader {
     for (const Camera& c : spec.scene.cameras) check_name("camera", c.name());
     for (const Illuminator& l : spec.scene.illuminators) check_name("illuminator", l.name);
     for (const Mesh& m : spec.scene.meshes) check_name("mesh", m.name);
+    for (const SpectacleLens& l : spec.scene.spectacle_lenses) check_name("spectacle lens", l.name);
     const Value count = root.required("count", "how many images");
     spec.count = count.as_exact_count();
     if (spec.count < 1 || spec.count > kMaxCount) count.fail("must be in [1, 2^40]");
@@ -436,6 +437,20 @@ struct Reader {
           o->finish();
         }
         meshes->finish();
+      }
+      if (auto lenses = parameters->optional_object("spectacle_lenses")) {
+        for (const SpectacleLens& lens : scene.spectacle_lenses) {
+          auto o = lenses->optional_object(lens.name);
+          if (!o) continue;
+          ParameterRule on{"spectacle_lens." + lens.name + ".on", ParameterType::boolean};
+          if (auto v = o->optional("on")) {
+            drawn[on.name] = read_distribution(*v, on);
+            where.emplace(on.name, v->where());
+            scene_specific.push_back(on);
+          }
+          o->finish();
+        }
+        lenses->finish();
       }
       parameters->finish();
     }
@@ -651,7 +666,9 @@ DatasetSpec load_dataset_spec(const std::filesystem::path& file) {
 std::vector<std::string> dataset_parameter_names() {
   std::vector<std::string> names;
   for (const ParameterRule& r : scene_rules()) names.push_back(r.name);
-  for (const char* n : {"illuminator.NAME.on", "illuminator.NAME.power_scale", "mesh.NAME.on"}) names.emplace_back(n);
+  for (const char* n : {"illuminator.NAME.on", "illuminator.NAME.power_scale", "mesh.NAME.on", "spectacle_lens.NAME.on"}) {
+    names.emplace_back(n);
+  }
   return names;
 }
 
@@ -838,6 +855,10 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   scene.meshes.clear();
   for (const Mesh& mesh : spec.scene.meshes) {
     if (value("mesh." + mesh.name + ".on").value_or(1) != 0) scene.meshes.push_back(mesh);
+  }
+  scene.spectacle_lenses.clear();
+  for (const SpectacleLens& lens : spec.scene.spectacle_lenses) {
+    if (value("spectacle_lens." + lens.name + ".on").value_or(1) != 0) scene.spectacle_lenses.push_back(lens);
   }
   for (Camera& camera : scene.cameras) {
     Sensor s = camera.sensor();

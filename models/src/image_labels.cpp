@@ -180,19 +180,24 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
       truth.pixel = r.pixel(glints[g], glint_path);
       view.glints.push_back(truth);
     }
-    // Absent for an eye without a tear film.
+    // Absent for an eye without a tear film in a scene without spectacle lenses.
     if (v.contains("distractors")) {
       const json& distractors = r.array(v, path, "distractors");
       for (std::size_t d = 0; d < distractors.size(); ++d) {
         const std::string distractor_path = path + ".distractors[" + std::to_string(d) + "]";
         DistractorTruth truth;
         const json& kind = r.member(distractors[d], distractor_path, "kind");
-        if (kind == to_string(DistractorKind::sclera)) {
-          truth.kind = DistractorKind::sclera;
-        } else if (kind == to_string(DistractorKind::tear_meniscus)) {
-          truth.kind = DistractorKind::tear_meniscus;
-        } else {
-          r.fail(distractor_path + ".kind", &kind, "must be \"sclera\" or \"tear_meniscus\"");
+        bool known = false;
+        for (const DistractorKind k : {DistractorKind::sclera, DistractorKind::tear_meniscus,
+                                       DistractorKind::spectacle_lens_front, DistractorKind::spectacle_lens_back}) {
+          if (kind == to_string(k)) {
+            truth.kind = k;
+            known = true;
+          }
+        }
+        if (!known) {
+          r.fail(distractor_path + ".kind", &kind,
+                 "must be \"sclera\", \"tear_meniscus\", \"spectacle_lens_front\" or \"spectacle_lens_back\"");
         }
         truth.illuminator = r.integer(distractors[d], distractor_path, "illuminator", 0, lights - 1);
         truth.status = r.status(distractors[d], distractor_path);

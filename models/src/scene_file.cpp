@@ -257,6 +257,80 @@ Screen read_screen(Object& s) {
   return Screen{anchor, r, d, wh[0], wh[1]};
 }
 
+// ------------------------------------------------------- spectacle lenses
+
+// Vogel's rule for a lens's base curve (its front surface's power, D):
+// power / 2 + 6 for plus lenses, power / 4 + 6 for minus lenses.
+double vogel_base_curve_d(double power_d) { return power_d > 0 ? power_d / 2 + 6 : power_d / 4 + 6; }
+
+// The centre thickness that leaves a plus lens's edge 1 mm thick at the
+// outline's farthest point (at least 2 mm, a minus lens's usual centre).
+double default_center_thickness_mm(double power_d, double front_radius_mm, double n, double reach_mm) {
+  double t = 2;
+  if (!(power_d > 0)) return t;
+  const auto sag = [](double r, double h) { return h * h / (r + std::sqrt(std::max(0.0, r * r - h * h))); };
+  for (int i = 0; i < 30; ++i) {
+    const double back = back_radius_for_power_mm(power_d, front_radius_mm, t, n);
+    const double edge = t + sag(back, reach_mm) - sag(front_radius_mm, reach_mm);
+    t = std::max(2.0, t + 1.0 - edge);
+  }
+  return t;
+}
+
+// A glasses lens, placed as a mesh is: position_mm its front vertex (the
+// optical centre), rotation_vector_deg or rotation_matrix turning the lens
+// frame (+z out of the front, away from the eye; +x along the outline's
+// first semi-axis) into the world; shaped by a prescription (power_d, with
+// base_curve_d and center_thickness_mm defaulted) or by its radii (as a
+// dump writes it).
+SpectacleLens read_spectacle_lens(Object& o, std::size_t index) {
+  SpectacleLens lens;
+  lens.name = o.get_or<std::string>("name", "lens" + std::to_string(index));
+  if (lens.name.empty()) o.required("name").fail("must not be empty");
+  const Point3 position = o.get<Point3>("position_mm");
+  const std::size_t orientation = o.one_of({"rotation_vector_deg", "rotation_matrix"});
+  const Rotation rotation =
+      orientation == 0 ? Rotation::from_rotation_vector(o.get<Vector3>("rotation_vector_deg") * kDegree)
+                       : read_rotation_matrix(o.required("rotation_matrix"));
+  lens.world_from_lens = Pose(rotation, position.from_origin());
+  lens.refractive_index = o.within_or("refractive_index", 1.0, 3.0, lens.refractive_index);
+  if (!(lens.refractive_index > 1)) o.required("refractive_index").fail("must be above 1");
+  if (auto axes = o.optional("outline_semi_axes_mm")) {
+    const std::vector<Value> a = axes->elements();
+    if (a.size() != 2) axes->fail("must hold 2 semi-axes in mm, [along lens x, along lens y]");
+    for (int i = 0; i < 2; ++i) lens.outline_semi_axes_mm[i] = a[i].within(1e-3, 60);
+  }
+  const double reach = std::max(lens.outline_semi_axes_mm[0], lens.outline_semi_axes_mm[1]);
+  if (o.one_of("power_d", "front_radius_mm")) {
+    if (o.has("back_radius_mm")) o.required("back_radius_mm").fail("only used with front_radius_mm");
+    const Value power = o.required("power_d");
+    const double power_d = power.within(-20, 20);
+    const double base_d = o.within_or("base_curve_d", 0.5, 20.0, std::max(0.5, vogel_base_curve_d(power_d)));
+    lens.front_radius_mm = 1000 * (lens.refractive_index - 1) / base_d;
+    try {
+      lens.center_thickness_mm = o.within_or(
+          "center_thickness_mm", 0.1, 30.0,
+          default_center_thickness_mm(power_d, lens.front_radius_mm, lens.refractive_index, reach));
+      lens.back_radius_mm =
+          back_radius_for_power_mm(power_d, lens.front_radius_mm, lens.center_thickness_mm, lens.refractive_index);
+    } catch (const std::invalid_argument& e) {
+      power.fail(e.what());
+    }
+  } else {
+    if (o.has("base_curve_d")) o.required("base_curve_d").fail("only used with power_d");
+    lens.front_radius_mm = o.get<double>("front_radius_mm");
+    lens.back_radius_mm = o.get<double>("back_radius_mm");
+    lens.center_thickness_mm = o.get<double>("center_thickness_mm");
+  }
+  o.finish();
+  try {
+    check_spectacle_lens(lens);
+  } catch (const std::invalid_argument& e) {
+    o.where().fail("", e.what());
+  }
+  return lens;
+}
+
 // ----------------------------------------------------------------- meshes
 
 // Vertices and triangles given in the scene itself (a dump, or a mesh
@@ -678,6 +752,17 @@ Scene read_scene(const std::string& text, const std::string& source_name, const 
     check_outside_eyes(scene, scene.illuminators.back().position, l.where().child("position_mm"));
   }
   if (auto screen = root.optional_object("screen")) scene.screen = read_screen(*screen);
+  std::set<std::string> lens_names;
+  std::vector<Value> lens_values = read_list(root, "spectacle_lenses", false);
+  for (std::size_t i = 0; i < lens_values.size(); ++i) {
+    Object o(lens_values[i]);
+    scene.spectacle_lenses.push_back(read_spectacle_lens(o, i));
+    if (!lens_names.insert(scene.spectacle_lenses.back().name).second) {
+      const auto v = o.optional("name");
+      (v ? v->where() : o.where())
+          .fail("\"" + scene.spectacle_lenses.back().name + "\"", "duplicate name (lens names must be unique)");
+    }
+  }
   // Meshes last: their files are read only once the rest of the scene is
   // known to be good.
   std::set<std::string> mesh_names;
@@ -862,6 +947,23 @@ std::string scene_to_json(const Scene& scene) {
   for (std::size_t i = 0; i < scene.eyes.size(); ++i) root["eyes"].push_back(eye_json(scene.eyes[i], i));
   root["meshes"] = ordered_json::array();
   for (const Mesh& m : scene.meshes) root["meshes"].push_back(mesh_json(m));
+  if (!scene.spectacle_lenses.empty()) {
+    root["spectacle_lenses"] = ordered_json::array();
+    for (const SpectacleLens& lens : scene.spectacle_lenses) {
+      const Rotation& r = lens.world_from_lens.rotation();
+      ordered_json o;
+      o["name"] = lens.name;
+      o["position_mm"] = point(Point3::origin() + lens.world_from_lens.translation());
+      o["rotation_matrix"] = ordered_json::array();
+      for (int row = 0; row < 3; ++row) o["rotation_matrix"].push_back(triple(r(row, 0), r(row, 1), r(row, 2)));
+      o["front_radius_mm"] = lens.front_radius_mm;
+      o["back_radius_mm"] = lens.back_radius_mm;
+      o["center_thickness_mm"] = lens.center_thickness_mm;
+      o["refractive_index"] = lens.refractive_index;
+      o["outline_semi_axes_mm"] = {lens.outline_semi_axes_mm[0], lens.outline_semi_axes_mm[1]};
+      root["spectacle_lenses"].push_back(o);
+    }
+  }
   if (scene.screen) {
     const Screen& s = *scene.screen;
     root["screen"] = {{"top_left_mm", point(s.top_left)},

@@ -601,11 +601,50 @@ LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from_w, 
     return out;
   }
   const Point3 p1 = lens_world(lens, x1), p2 = lens_world(lens, x2);
+  // Out of the glass: the front sphere's outward normal, the back's inward.
+  const UnitVector3 m1 = UnitVector3::normalize(lens.world_from_lens * n1);
+  const UnitVector3 m2 = UnitVector3::normalize(lens.world_from_lens * -n2);
   out.first = from_in_front ? p1 : p2;
   out.second = from_in_front ? p2 : p1;
+  out.first_normal = from_in_front ? m1 : m2;
+  out.second_normal = from_in_front ? m2 : m1;
   out.leaving = UnitVector3::normalize(out.first - from_w);
+  out.inside = UnitVector3::normalize(out.second - out.first);
   out.arriving = UnitVector3::normalize(to_w - out.second);
   out.status = PathStatus::ok;
+  return out;
+}
+
+LightThroughLens light_through_lens(const SpectacleLens& lens, const Point3& light, const Point3& near) {
+  LightThroughLens out;
+  out.passage = solve_lens_passage(lens, near, light);
+  out.status = out.passage.status;
+  if (out.status != PathStatus::ok) return out;
+  const UnitVector3 d0 = out.passage.leaving;
+  const UnitVector3 e1 = UnitVector3::normalize(cross(d0, std::abs(d0.x()) < 0.9 ? Vector3{1, 0, 0} : Vector3{0, 1, 0}));
+  const UnitVector3 e2 = UnitVector3::normalize(cross(d0, e1));
+  const double h = 1e-4 * distance(near, light);
+  // Per axis: how the leaving direction at `near` and the arriving one at
+  // the light turn as `near` moves across.
+  Vector3 leaving_rate[2], arriving_rate[2];
+  for (int axis = 0; axis < 2; ++axis) {
+    const UnitVector3& e = axis == 0 ? e1 : e2;
+    const LensPassage plus = solve_lens_passage(lens, near + e * h, light);
+    const LensPassage minus = solve_lens_passage(lens, near - e * h, light);
+    if (plus.status != PathStatus::ok || minus.status != PathStatus::ok) {
+      out.status = plus.status != PathStatus::ok ? plus.status : minus.status;
+      return out;
+    }
+    leaving_rate[axis] = (plus.leaving.vector() - minus.leaving.vector()) / (2 * h);
+    arriving_rate[axis] = (plus.arriving.vector() - minus.arriving.vector()) / (2 * h);
+  }
+  // Directions from a point at distance s along d0 turn by -e / s per unit
+  // of sideways move: the vergence 1/s.
+  out.vergence_per_mm = -0.5 * (dot(leaving_rate[0], e1) + dot(leaving_rate[1], e2));
+  out.solid_angle_per_area = std::abs(dot(cross(arriving_rate[0], arriving_rate[1]), out.passage.arriving));
+  if (!std::isfinite(out.vergence_per_mm) || !std::isfinite(out.solid_angle_per_area)) {
+    out.status = PathStatus::no_solution;
+  }
   return out;
 }
 

@@ -24,33 +24,30 @@ PathStatus image_of(PathStatus path, const Point3& point, const Camera& camera, 
   return PathStatus::no_solution;
 }
 
-// A path's leg from a point on the eye to an end outside it (a camera or
-// a light): straight, or through the spectacle lens its straight segment
-// crosses (the first one listed, when several do).
-struct Leg {
-  PathStatus status = PathStatus::ok;
-  Point3 aim;            // the end, or a point along the leg's first segment as far away
-  Point3 last;           // the leg's last corner before the end: the start when straight
-  std::vector<Point3> corners;  // where it crosses the lens's surfaces, in order
-};
-
 Leg leg_to(const Scene& scene, const Point3& from, const Point3& end) {
   Leg out;
-  out.aim = end;
-  out.last = from;
-  for (const SpectacleLens& lens : scene.spectacle_lenses) {
+  for (int k = 0; k < static_cast<int>(scene.spectacle_lenses.size()); ++k) {
+    const SpectacleLens& lens = scene.spectacle_lenses[k];
     if (!segment_crosses_lens(lens, from, end)) continue;
     const LensPassage p = solve_lens_passage(lens, from, end);
     // Ends on one side with the segment grazing through the glass: no path.
     out.status = p.status == PathStatus::invalid_input ? PathStatus::no_solution : p.status;
-    if (p.status != PathStatus::ok) return out;
-    out.aim = from + p.leaving * distance(from, end);
-    out.last = p.second;
-    out.corners = {p.first, p.second};
+    out.lens = k;
+    if (p.status == PathStatus::ok) out.passage = p;
     return out;
   }
   return out;
 }
+
+// A point along the leg's first segment as far from `from` as its end:
+// the eye's solver's virtual end.
+Point3 aim_of(const Leg& leg, const Point3& from, const Point3& end) {
+  return leg.passage ? from + leg.passage->leaving * distance(from, end) : end;
+}
+
+// The leg's last corner before its end: where the camera sees what lies
+// at `from`.
+Point3 last_of(const Leg& leg, const Point3& from) { return leg.passage ? leg.passage->second : from; }
 
 bool path_exists(PathStatus s) { return s == PathStatus::ok || s == PathStatus::off_cornea; }
 
@@ -67,16 +64,12 @@ Path through_lenses(const Scene& scene, const Point3* light, const Point3& camer
   const Point3& light_end = light ? *light : camera;
   const auto legs_from = [&](const Path& p) {
     camera_leg = leg_to(scene, point_of(p), camera);
-    light_leg = light ? leg_to(scene, point_of(p), *light) : Leg{PathStatus::ok, camera, point_of(p), {}};
-    for (const Leg* leg : {&camera_leg, &light_leg}) {
-      if (leg->status != PathStatus::ok) return leg->status;
-    }
-    return PathStatus::ok;
+    light_leg = light ? leg_to(scene, point_of(p), *light) : Leg{};
+    return camera_leg.status != PathStatus::ok ? camera_leg.status : light_leg.status;
   };
-  const auto straight = [&] { return camera_leg.corners.empty() && light_leg.corners.empty(); };
+  const auto straight = [&] { return !camera_leg.passage && !light_leg.passage; };
   Path path = solve(light_end, camera);
-  camera_leg = light_leg = {PathStatus::ok, camera, point_of(path), {}};
-  light_leg.aim = light_end;
+  camera_leg = light_leg = Leg{};
   if (scene.spectacle_lenses.empty() || !path_exists(path.status)) return path;
   constexpr double kToleranceMm = 1e-11;
   for (int i = 0; i < 100; ++i) {
@@ -98,7 +91,7 @@ Path through_lenses(const Scene& scene, const Point3* light, const Point3& camer
       return path;
     }
     const Point3 point = point_of(path);
-    Path next = solve(light_leg.aim, camera_leg.aim);
+    Path next = solve(aim_of(light_leg, point, light_end), aim_of(camera_leg, point, camera));
     if (!path_exists(next.status)) return next;
     const bool converged = distance(point_of(next), point) <= kToleranceMm;
     path = next;
@@ -115,9 +108,11 @@ Path through_lenses(const Scene& scene, const Point3* light, const Point3& camer
 Occluder occluder_along(const TruthOptions& options, const Point3& from, const Leg& leg, const Point3& end) {
   if (!options.occluded) return Occluder::none;
   Point3 a = from;
-  for (const Point3& b : leg.corners) {
-    if (const Occluder o = options.occluded(a, b); o != Occluder::none) return o;
-    a = b;
+  if (leg.passage) {
+    for (const Point3& b : {leg.passage->first, leg.passage->second}) {
+      if (const Occluder o = options.occluded(a, b); o != Occluder::none) return o;
+      a = b;
+    }
   }
   return options.occluded(a, end);
 }
@@ -147,21 +142,17 @@ const char* to_string(DistractorKind kind) {
 
 namespace {
 
-// A mirror's highlight through the scene's lenses: the path, its legs, and
-// its pixel and status as the camera sees it (before occlusion).
+// A highlight as the camera sees it (before occlusion): its pixel and status.
 struct SeenReflection {
-  Reflection reflection;
-  Leg camera_leg, light_leg;
+  SeenHighlight highlight;
   PathStatus status = PathStatus::no_solution;
   Pixel pixel;
 };
 
-SeenReflection straight_reflection(const Reflection& r, const Camera& camera, const Point3& light) {
+SeenReflection seen_by(const SeenHighlight& h, const Camera& camera) {
   SeenReflection out;
-  out.reflection = r;
-  out.camera_leg = {PathStatus::ok, camera.center(), r.point, {}};
-  out.light_leg = {PathStatus::ok, light, r.point, {}};
-  out.status = image_of(r.status, r.point, camera, out.pixel);
+  out.highlight = h;
+  out.status = image_of(h.reflection.status, h.seen_at(), camera, out.pixel);
   return out;
 }
 
@@ -170,7 +161,7 @@ DistractorTruth seen_distractor(DistractorKind kind, const SeenReflection& h, co
   DistractorTruth d;
   d.kind = kind;
   d.illuminator = light;
-  d.reflection = h.reflection;
+  d.reflection = h.highlight.reflection;
   d.pixel = h.pixel;
   d.status = h.status;
   if (d.status == PathStatus::ok) {
@@ -178,12 +169,12 @@ DistractorTruth seen_distractor(DistractorKind kind, const SeenReflection& h, co
     // highlight near the limbus. What the camera sees in front of the
     // highlight comes first, then what shadows it (as for glints).
     const auto blocker = [&](const Leg& leg, const Point3& end) {
-      const Point3& first = leg.corners.empty() ? end : leg.corners.front();
-      if (eye.cap_crosses(h.reflection.point, first)) return Occluder::eye;
-      return occluder_along(options, h.reflection.point, leg, end);
+      const Point3& first = leg.passage ? leg.passage->first : end;
+      if (eye.cap_crosses(d.reflection.point, first)) return Occluder::eye;
+      return occluder_along(options, d.reflection.point, leg, end);
     };
-    d.occluder = blocker(h.camera_leg, camera.center());
-    if (d.occluder == Occluder::none) d.occluder = blocker(h.light_leg, scene.illuminators.at(light).position);
+    d.occluder = blocker(h.highlight.to_camera, camera.center());
+    if (d.occluder == Occluder::none) d.occluder = blocker(h.highlight.to_light, scene.illuminators.at(light).position);
     if (d.occluder != Occluder::none) d.status = PathStatus::occluded;
   }
   return d;
@@ -193,9 +184,21 @@ DistractorTruth seen_distractor(DistractorKind kind, const SeenReflection& h, co
 
 DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
                                  const Eye& eye, int light, const Camera& camera, const TruthOptions& options) {
-  const Point3& light_position = scene.illuminators.at(light).position;
-  return seen_distractor(kind, straight_reflection(highlight, camera, light_position), scene, eye, light, camera,
-                         options);
+  SeenHighlight straight;
+  straight.reflection = highlight;
+  return seen_distractor(kind, seen_by(straight, camera), scene, eye, light, camera, options);
+}
+
+DistractorTruth distractor_truth(DistractorKind kind, const SeenHighlight& highlight, const Scene& scene,
+                                 const Eye& eye, int light, const Camera& camera, const TruthOptions& options) {
+  return seen_distractor(kind, seen_by(highlight, camera), scene, eye, light, camera, options);
+}
+
+SeenHighlight see_highlight(const Scene& scene, const Point3& light, const Point3& camera_center, const Mirror& mirror) {
+  SeenHighlight out;
+  out.reflection = through_lenses<Reflection>(
+      scene, &light, camera_center, mirror, [](const Reflection& r) { return r.point; }, out.to_camera, out.to_light);
+  return out;
 }
 
 namespace {
@@ -207,42 +210,20 @@ RefractedImage refracted_image(const Scene& scene, const Eye& eye, const Camera&
   out.path = through_lenses<Refraction>(
       scene, nullptr, camera.center(), [&](const Point3&, const Point3& aim) { return solve_refraction(eye, inner, aim); },
       [](const Refraction& r) { return r.anterior_point; }, camera_leg, no_light);
-  out.status = image_of(out.path.status, camera_leg.last, camera, out.pixel);
+  out.status = image_of(out.path.status, last_of(camera_leg, out.path.anterior_point), camera, out.pixel);
   return out;
 }
 
-template <class Mirror>
 SeenReflection seen_reflection(const Scene& scene, const Camera& camera, const Point3& light, const Mirror& mirror) {
-  SeenReflection out;
-  out.reflection = through_lenses<Reflection>(
-      scene, &light, camera.center(), mirror, [](const Reflection& r) { return r.point; }, out.camera_leg,
-      out.light_leg);
-  out.status = image_of(out.reflection.status, out.camera_leg.last, camera, out.pixel);
-  return out;
+  return seen_by(see_highlight(scene, light, camera.center(), mirror), camera);
 }
 
 // The occluder of a highlight the camera would see: what it sees in front
 // of it first, then what shadows it from its light.
-Occluder highlight_occluder(const TruthOptions& options, const SeenReflection& h, const Point3& camera,
+Occluder highlight_occluder(const TruthOptions& options, const SeenHighlight& h, const Point3& camera,
                             const Point3& light) {
-  const Occluder o = occluder_along(options, h.reflection.point, h.camera_leg, camera);
-  return o != Occluder::none ? o : occluder_along(options, h.reflection.point, h.light_leg, light);
-}
-
-// The eye a spectacle lens sits in front of: the one whose corneal apex is
-// nearest its back vertex.
-int eye_behind(const Scene& scene, const SpectacleLens& lens) {
-  const Point3 back = lens.world_from_lens * Point3{0, 0, -lens.center_thickness_mm};
-  int best = -1;
-  double nearest = 0;
-  for (int e = 0; e < static_cast<int>(scene.eyes.size()); ++e) {
-    const double d = distance(scene.eyes[e].corneal_apex(), back);
-    if (best < 0 || d < nearest) {
-      best = e;
-      nearest = d;
-    }
-  }
-  return best;
+  const Occluder o = occluder_along(options, h.reflection.point, h.to_camera, camera);
+  return o != Occluder::none ? o : occluder_along(options, h.reflection.point, h.to_light, light);
 }
 
 // A ghost's label: where the camera sees it, and whether it does.
@@ -264,6 +245,21 @@ DistractorTruth ghost_truth(const Scene& scene, int lens, const LensReflection& 
 }
 
 }  // namespace
+
+int eye_behind(const Scene& scene, int lens_index) {
+  const SpectacleLens& lens = scene.spectacle_lenses.at(lens_index);
+  const Point3 back = lens.world_from_lens * Point3{0, 0, -lens.center_thickness_mm};
+  int best = -1;
+  double nearest = 0;
+  for (int e = 0; e < static_cast<int>(scene.eyes.size()); ++e) {
+    const double d = distance(scene.eyes[e].corneal_apex(), back);
+    if (best < 0 || d < nearest) {
+      best = e;
+      nearest = d;
+    }
+  }
+  return best;
+}
 
 RefractedImage image_through_cornea(const Eye& eye, const Camera& camera, const Point3& inner) {
   return image_through_cornea(Scene{}, eye, camera, inner);
@@ -300,11 +296,11 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
             scene, camera, light, [&](const Point3& source, const Point3& target) { return solve_reflection(eye, source, target); });
         GlintTruth g;
         g.illuminator = l;
-        g.reflection = seen.reflection;
+        g.reflection = seen.highlight.reflection;
         g.pixel = seen.pixel;
         g.status = seen.status;
         if (g.status == PathStatus::ok) {
-          g.occluder = highlight_occluder(options, seen, camera.center(), light);
+          g.occluder = highlight_occluder(options, seen.highlight, camera.center(), light);
           if (g.occluder != Occluder::none) g.status = PathStatus::occluded;
         }
         view.glints.push_back(g);
@@ -315,13 +311,13 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options) {
               seen_reflection(scene, camera, scene.illuminators[l].position, [&](const Point3& source, const Point3& target) {
                 return solve_scleral_reflection(eye, source, target);
               });
-          if (seen.reflection.status != PathStatus::ok) continue;
+          if (seen.highlight.reflection.status != PathStatus::ok) continue;
           view.distractors.push_back(seen_distractor(DistractorKind::sclera, seen, scene, eye, l, camera, options));
         }
       }
       for (int k = 0; k < static_cast<int>(scene.spectacle_lenses.size()); ++k) {
         const SpectacleLens& lens = scene.spectacle_lenses[k];
-        if (eye_behind(scene, lens) != e) continue;
+        if (eye_behind(scene, k) != e) continue;
         for (const LensSurface surface : {LensSurface::front, LensSurface::back}) {
           for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
             const LensReflection g = solve_lens_reflection(lens, surface, scene.illuminators[l].position, camera.center());

@@ -106,8 +106,10 @@ class GlintLabel:
 @dataclass(frozen=True)
 class DistractorLabel:
     """A highlight that is no Purkinje image (docs/labels.md, views[k].distractors[j]):
-    kind "sclera", one light mirrored by a wet sclera's tear film, or
-    "tear_meniscus", by the lower lid's tear meniscus (render labels only)."""
+    kind "sclera", one light mirrored by a wet sclera's tear film,
+    "tear_meniscus", by the lower lid's tear meniscus (render labels only),
+    or "spectacle_lens_front" / "spectacle_lens_back", by a glasses lens's
+    surface (a ghost; spectacle_lens names the lens)."""
 
     kind: str
     illuminator: int
@@ -120,6 +122,9 @@ class DistractorLabel:
     incidence_deg: float
     #: For status "occluded": "skin", "lash", "mesh" or "eye" (the cornea included).
     occluded_by: Optional[str] = None
+    #: For a ghost: the lens's index in the scene's spectacle_lenses, and its name.
+    spectacle_lens: Optional[int] = None
+    spectacle_lens_name: Optional[str] = None
 
     @property
     def pixel_px(self) -> Optional[np.ndarray]:
@@ -129,7 +134,8 @@ class DistractorLabel:
     @classmethod
     def _from(cls, d: Dict[str, Any]) -> "DistractorLabel":
         return cls(d["kind"], d["illuminator"], d["illuminator_name"], d["status"], d["u_px"], d["v_px"],
-                   _vector(d["point_mm"]), _vector(d["normal"]), d["incidence_deg"], d.get("occluded_by"))
+                   _vector(d["point_mm"]), _vector(d["normal"]), d["incidence_deg"], d.get("occluded_by"),
+                   d.get("spectacle_lens"), d.get("spectacle_lens_name"))
 
 
 @dataclass(frozen=True)

@@ -450,7 +450,7 @@ LABEL_COLOURS = {
     "lash": ("#ff33ff", "hidden by a lash"),
     "mesh": ("#3399ff", "hidden by a mesh"),
     "eye": ("#ff3333", "hidden by the eye"),
-    "distractor": ("#00ffff", "highlight on the tears"),  # a seen distractor, not a status
+    "distractor": ("#00ffff", "highlight that is no glint"),  # a seen distractor, not a status
 }
 
 
@@ -459,7 +459,7 @@ def draw_labels(ax, view, origin: Tuple[float, float] = (0.0, 0.0), scale: float
     image: each glint as a +, each pupil-border point as a dot, coloured by
     status (seen; hidden by skin, a lash, a mesh or the eye: `occluded_by`),
     the whole pupil's ellipse dashed and its refracted centre as an x, and
-    each distractor the camera sees (a wet sclera's highlight) as a cyan
+    each distractor the camera sees (a wet eye's highlight, a lens's ghost) as a cyan
     square (key "distractor").
     `origin` and `scale` map pixels into the axes' coordinates (a crop's
     corner, a zoom), with pixel centres at integers as the labels have them.

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "integrator.h"
+#include "lens_light.h"
 #include "sampler.h"
 #include "screen_cache.h"
 #include "purkinje/renderer/radiometry.h"
@@ -121,6 +122,7 @@ class FastIntegrator final : public PathIntegrator {
         tracer_(tracer),
         lashes_(tracer.has_lashes()),
         lights_(lights_of(scene, camera)),
+        seen_(scene, lights_),
         seed_(options.seed) {
     const IrisIrradianceCache::Visibility visible = [this](const Point3& light, const Point3& cornea) {
       return !tracer_.occluded_except_cornea(light, cornea);
@@ -132,7 +134,9 @@ class FastIntegrator final : public PathIntegrator {
     }
     iris_.resize(scene.eyes.size());
     for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
-      for (const Light& l : lights_) {
+      for (std::size_t k = 0; k < lights_.size(); ++k) {
+        // Through a spectacle lens: its image of the light as the cornea sees it.
+        const Light l = seen_.at(scene.eyes[e].cornea_center(), k);
         iris_[e].emplace_back(scene.eyes[e], l.position, l.intensity_w_sr,
                               iris_grid_sizes(camera, scene.eyes[e], options).direct, visible);
       }
@@ -154,7 +158,7 @@ class FastIntegrator final : public PathIntegrator {
     visibility_ = std::make_unique<VisibilityCache>(
         camera, traced, kVisibilitySpacing,
         lights_.size(), [this](const Pixel& p) { return diffuse_point_at(p); },
-        [this](const DiffusePoint& p, std::size_t light) { return lit(p.point, p.normal, lights_[light]); });
+        [this](const DiffusePoint& p, std::size_t light) { return lit(p.point, p.normal, seen_.at(p.point, light)); });
   }
 
   void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
@@ -249,7 +253,7 @@ class FastIntegrator final : public PathIntegrator {
   DiffusePoint diffuse_point_at(const Pixel& image_position) const {
     Ray ray{camera_.center(), camera_.back_project(image_position)};
     double path_mm = 0;
-    for (int depth = 0; depth <= kMaxSpecularDepth; ++depth) {
+    for (int depth = 0; depth <= max_depth_; ++depth) {
       const Hit hit = tracer_.intersect_except_lashes(ray);
       path_mm += hit.t;
       switch (scattering_of(hit.surface)) {
@@ -355,7 +359,7 @@ class FastIntegrator final : public PathIntegrator {
     const Vector3 n = facing_normal(hit);
     const Point3 origin = hit.point + n * kRayOffsetMm;
     for (std::size_t k = 0; k < lights_.size(); ++k) {
-      const Light& l = lights_[k];
+      const Light l = seen_.at(hit.point, k);
       const Vector3 to_light = l.position - hit.point;
       const double d2 = to_light.squared_norm();
       const double cos_theta = dot(n, to_light) / std::sqrt(d2);
@@ -375,7 +379,8 @@ class FastIntegrator final : public PathIntegrator {
   // faces, shadows ignored.
   double unshadowed_irradiance(const Point3& point, const Vector3& normal) const {
     double e = 0;
-    for (const Light& l : lights_) {
+    for (std::size_t k = 0; k < lights_.size(); ++k) {
+      const Light l = seen_.at(point, k);
       const Vector3 to_light = l.position - point;
       const double d2 = to_light.squared_norm();
       e += std::max(0.0, dot(normal, to_light)) / (d2 * std::sqrt(d2)) * l.intensity_w_sr * kPerSquareMm;
@@ -573,7 +578,7 @@ class FastIntegrator final : public PathIntegrator {
         return;
       }
       case Scattering::interface: {
-        if (depth >= kMaxSpecularDepth) return;
+        if (depth >= max_depth_) return;
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const double w_t = weight * (1 - c.reflectance) * c.eta * c.eta, w_r = weight * c.reflectance;
         if (c.transmitted && w_t > min_weight) {
@@ -593,7 +598,7 @@ class FastIntegrator final : public PathIntegrator {
   // Radiance crossing from index n2 into n1 scales by (n1 / n2)^2.
   void interface(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
                  const Primary* primary) const {
-    if (depth >= kMaxSpecularDepth) return;
+    if (depth >= max_depth_) return;
     const InterfaceCrossing c = cross_interface(scene_, ray, hit);
     if (c.transmitted) {
       const double w = weight * (1.0 - c.reflectance) * c.eta * c.eta;
@@ -615,6 +620,8 @@ class FastIntegrator final : public PathIntegrator {
   const RayTracer& tracer_;
   bool lashes_;  // the scene has lashes: settled shadow rays are traced against them
   std::vector<Light> lights_;
+  SeenLights seen_;  // the lights through spectacle lenses
+  int max_depth_ = specular_depth(scene_, kMaxSpecularDepth);
   std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]
   std::vector<IrisRings> iris_indirect_ = std::vector<IrisRings>(scene_.eyes.size());  // [eye], channels: groups
   // Lights with one wavelength response form a group (usually all of them).

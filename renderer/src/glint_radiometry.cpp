@@ -10,8 +10,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "lens_light.h"
 #include "mirror_radiometry.h"
 #include "purkinje/models/check.h"
+#include "purkinje/models/truth.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -74,11 +76,46 @@ void check_radiometry_inputs(const Illuminator& light, const Camera& camera) {
                    camera.sensor().pixel_pitch_mm);
 }
 
-GlintRadiometry mirror_radiometry(const Mirror& mirror, double inner_index, const Illuminator& light,
-                                  const Camera& camera, const Reflection& reflection) {
+namespace {
+
+// mirror_radiometry without lenses.
+GlintRadiometry straight_radiometry(const Mirror& mirror, double reflectance, const Illuminator& light,
+                                    const Camera& camera, const Reflection& reflection);
+
+}  // namespace
+
+GlintRadiometry mirror_radiometry(const Mirror& mirror, double reflectance, const Illuminator& light,
+                                  const Camera& camera, const Reflection& reflection, const Scene* lenses) {
+  if (!lenses || lenses->spectacle_lenses.empty()) return straight_radiometry(mirror, reflectance, light, camera, reflection);
+  // Each of the mirror's reflections as the camera sees it through the
+  // lenses: what the differences below need of a reflection is where the
+  // camera sees it and the direction in which its light leaves the LED.
+  const auto seen = [&](const Point3& source, const Point3& target) {
+    const SeenHighlight h = see_highlight(*lenses, source, target, mirror);
+    Reflection r = h.reflection;
+    r.point = h.seen_at();
+    r.incident = h.from_light();
+    return r;
+  };
+  const SeenHighlight central = see_highlight(*lenses, light.position, camera.center(), mirror);
+  if (central.reflection.status != PathStatus::ok ||
+      distance(central.reflection.point, reflection.point) > 1e-9) {
+    return failed(PathStatus::not_converged);  // not this highlight's path
+  }
+  GlintRadiometry out = straight_radiometry(seen, reflectance, light, camera, seen(light.position, camera.center()));
+  for (const Leg* leg : {&central.to_camera, &central.to_light}) {
+    if (leg->passage) out.power_w *= lens_transmittance(*leg->passage, lenses->spectacle_lenses[leg->lens].refractive_index);
+  }
+  return out;
+}
+
+namespace {
+
+GlintRadiometry straight_radiometry(const Mirror& mirror, double reflectance, const Illuminator& light,
+                                    const Camera& camera, const Reflection& reflection) {
   GlintRadiometry out;
   out.status = PathStatus::ok;
-  out.fresnel = fresnel_reflectance(std::cos(reflection.incidence_rad), 1.0, inner_index);
+  out.fresnel = reflectance;
 
   // Solid angle at the LED per unit aperture area: how the incident
   // direction turns as the target slides over the aperture plane. The
@@ -148,6 +185,8 @@ GlintRadiometry mirror_radiometry(const Mirror& mirror, double inner_index, cons
   return out;
 }
 
+}  // namespace
+
 bool roughness_spread(const double shape[3], const UnitVector3& t1, const UnitVector3& t2, double sigma_rad,
                       const Illuminator& light, const Camera& camera, const Reflection& reflection,
                       double cov_px2[3]) {
@@ -192,19 +231,51 @@ bool roughness_spread(const double shape[3], const UnitVector3& t1, const UnitVe
   return true;
 }
 
+GlintRadiometry ghost_radiometry(const SpectacleLens& lens, LensSurface surface, const Illuminator& light,
+                                 const Camera& camera) {
+  check_radiometry_inputs(light, camera);
+  // What mirror_radiometry differences: where the camera sees the ghost
+  // and the direction in which its light leaves the LED.
+  const Mirror seen = [&](const Point3& source, const Point3& target) {
+    const LensReflection g = solve_lens_reflection(lens, surface, source, target);
+    Reflection r = g.mirror;
+    r.status = g.status;
+    r.point = g.exit;
+    r.incident = g.from_source;
+    return r;
+  };
+  const LensReflection ghost = solve_lens_reflection(lens, surface, light.position, camera.center());
+  if (ghost.status != PathStatus::ok) return failed(ghost.status);
+  const double n = lens.refractive_index;
+  const double cos_mirror = std::cos(ghost.mirror.incidence_rad);
+  double reflectance = fresnel_reflectance(cos_mirror, 1.0, n);
+  if (surface == LensSurface::back) {
+    // Inside the glass, and through the front surface in and out.
+    const Point3 centre = lens.world_from_lens * Point3{0, 0, -lens.front_radius_mm};
+    const auto crossing = [&](const Point3& p, const UnitVector3& in_air) {
+      return 1 - fresnel_reflectance(std::abs(dot(in_air, UnitVector3::normalize(p - centre))), 1.0, n);
+    };
+    reflectance = fresnel_reflectance(cos_mirror, n, 1.0) * crossing(ghost.entry, ghost.from_source) *
+                  crossing(ghost.exit, ghost.to_target);
+  }
+  return mirror_radiometry(seen, reflectance, light, camera, seen(light.position, camera.center()));
+}
+
 GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
-                                 const Reflection& reflection) {
+                                 const Reflection& reflection, const Scene* lenses) {
   check_radiometry_inputs(light, camera);
   if (reflection.status != PathStatus::ok) return failed(reflection.status);
   if (!reflection.on_cap) return failed(PathStatus::off_cornea);
   const Mirror cornea = [&](const Point3& source, const Point3& target) {
     return solve_reflection(eye, source, target);
   };
-  return mirror_radiometry(cornea, anterior_inner_index(eye.model()), light, camera, reflection);
+  return mirror_radiometry(cornea,
+                           fresnel_reflectance(std::cos(reflection.incidence_rad), 1.0, anterior_inner_index(eye.model())),
+                           light, camera, reflection, lenses);
 }
 
 GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& film, const Illuminator& light,
-                                             const Camera& camera, const Reflection& reflection) {
+                                             const Camera& camera, const Reflection& reflection, const Scene* lenses) {
   check_radiometry_inputs(light, camera);
   require_non_negative("tear_film.sclera_roughness_deg", film.sclera_roughness_deg);
   if (reflection.status != PathStatus::ok) return failed(reflection.status);
@@ -215,7 +286,8 @@ GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& fil
   const Mirror sphere = [&](const Point3& source, const Point3& target) {
     return solve_sphere_reflection(centre, R, source, target);
   };
-  GlintRadiometry out = mirror_radiometry(sphere, kTearFilmIndex, light, camera, reflection);
+  GlintRadiometry out = mirror_radiometry(
+      sphere, fresnel_reflectance(std::cos(reflection.incidence_rad), 1.0, kTearFilmIndex), light, camera, reflection, lenses);
   if (out.status != PathStatus::ok || film.sclera_roughness_deg == 0) return out;
   // A sphere: S = I / R in any tangent basis.
   const UnitVector3 t1 = perpendicular(reflection.normal);

@@ -26,7 +26,8 @@ Scattering scattering_of(Surface surface) {
     case Surface::iris: return Scattering::iris;
     case Surface::pupil: return Scattering::pupil;
     case Surface::cornea_anterior:
-    case Surface::cornea_posterior: return Scattering::interface;
+    case Surface::cornea_posterior:
+    case Surface::spectacle_lens: return Scattering::interface;
   }
   return Scattering::none;
 }
@@ -49,7 +50,8 @@ bool scene_has_lashes(const Scene& scene) {
   return false;
 }
 
-bool scene_has_tear_film(const Scene& scene) {
+bool scene_has_distractors(const Scene& scene) {
+  if (!scene.spectacle_lenses.empty()) return true;
   for (const Eye& eye : scene.eyes) {
     if (eye.appearance().tear_film) return true;
   }
@@ -72,11 +74,17 @@ PixelClass class_of(Surface s) {
 
 void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* record) {
   if (!record) return;
-  if (depth == 0 && hit.surface != Surface::none) {
-    record->hit = true;
-    record->depth_mm = (camera.camera_from_world() * hit.point).z;
-    record->normal = hit.normal;
-    record->through_cornea = hit.surface == Surface::cornea_anterior;
+  // The camera sees through spectacle lenses: the first surface beyond
+  // them is what it sees first.
+  if (depth == record->lens_crossings) {
+    if (hit.surface == Surface::spectacle_lens) {
+      ++record->lens_crossings;
+    } else if (hit.surface != Surface::none) {
+      record->hit = true;
+      record->depth_mm = (camera.camera_from_world() * hit.point).z;
+      record->normal = hit.normal;
+      record->through_cornea = hit.surface == Surface::cornea_anterior;
+    }
   }
   record->pixel_class = class_of(hit.surface);
 }
@@ -105,11 +113,16 @@ double diffuse_albedo(const Scene& scene, const Hit& hit) {
 }
 
 InterfaceCrossing cross_interface(const Scene& scene, const Ray& ray, const Hit& hit) {
-  const EyeModel& m = scene.eyes[hit.eye].model();
-  double n_outer = 1.0, n_inner = anterior_inner_index(m);
-  if (hit.surface == Surface::cornea_posterior) {
-    n_outer = m.posterior_cornea->cornea_index;
-    n_inner = m.aqueous_index;
+  double n_outer = 1.0, n_inner = 1.0;
+  if (hit.surface == Surface::spectacle_lens) {
+    n_inner = scene.spectacle_lenses[hit.lens].refractive_index;  // its normal points out of the glass
+  } else {
+    const EyeModel& m = scene.eyes[hit.eye].model();
+    n_inner = anterior_inner_index(m);
+    if (hit.surface == Surface::cornea_posterior) {
+      n_outer = m.posterior_cornea->cornea_index;
+      n_inner = m.aqueous_index;
+    }
   }
   const Vector3 d = ray.direction.vector();
   const bool entering = dot(d, hit.normal.vector()) < 0;

@@ -41,22 +41,26 @@ struct Contribution {
   }
 };
 
-// What the pixel's primary path saw first, for AOVs.
+// What the pixel's primary path saw first (through any spectacle lens),
+// for AOVs.
 struct PrimaryRecord {
   PixelClass pixel_class = PixelClass::background;
   bool hit = false;
   double depth_mm = 0;
   Vector3 normal;
   bool through_cornea = false;
+  int lens_crossings = 0;  // spectacle lens surfaces crossed before it
 };
 PixelClass class_of(Surface s);
 // Whether any eye of the scene has lashes (its images then have a lash
 // class and coverage plane).
 bool scene_has_lashes(const Scene& scene);
-// Whether any eye has a tear film (a wet sclera's highlights, their mask).
-bool scene_has_tear_film(const Scene& scene);
+// Whether the scene mirrors lights other than in corneas: an eye with a
+// tear film (a wet sclera's highlights) or a spectacle lens (its ghosts);
+// its images then have a distractor mask.
+bool scene_has_distractors(const Scene& scene);
 // Fills `record` (when given) from the first hit of a camera ray's
-// transmitted chain: depth, normal and class.
+// transmitted chain beyond any spectacle lens: depth, normal and class.
 void record_hit(const Hit& hit, const Camera& camera, int depth, PrimaryRecord* record);
 // The Lambertian albedo at a diffuse hit (the textured iris included), and
 // 0 for the inside of the sclera (the eye's dark inside), the pupil,
@@ -76,8 +80,8 @@ double sclera_texture(std::uint64_t seed, double turn, double polar_rad, double 
 double textured_skin_albedo(const Eye& eye, const Point3& world);
 double textured_sclera_albedo(const Eye& eye, const Point3& world);
 
-// A ray meeting a corneal interface: which side it comes from, the Fresnel
-// reflectance, and the two continuing directions.
+// A ray meeting a corneal or spectacle lens interface: which side it comes
+// from, the Fresnel reflectance, and the two continuing directions.
 struct InterfaceCrossing {
   double reflectance = 1;             // 1: total internal reflection
   double eta = 1;                     // n1 / n2 (incident over transmitted index)
@@ -100,6 +104,13 @@ void add_bright_pupil(const Eye& eye, const std::vector<Light>& lights, const Po
   for (std::size_t k = 0; k < lights.size(); ++k) {
     out.add(weight * bright_pupil_radiance(eye, lights[k].position, camera_center, irradiance(k)), lights[k]);
   }
+}
+
+// How many interface crossings a specular chain may make: an integrator's
+// own `base` for the eyes, four more with spectacle lenses (a lens crossed
+// on the way in and out).
+inline int specular_depth(const Scene& scene, int base) {
+  return base + (scene.spectacle_lenses.empty() ? 0 : 4);
 }
 
 // What a surface does to light, for the integrators' one switch each.

@@ -4,21 +4,32 @@
 
 #include <functional>
 
+#include "purkinje/models/scene.h"
 #include "purkinje/renderer/radiometry.h"
 
 namespace purkinje::renderer {
 
-// A mirror: its reflection from a source toward a target, as its solver
-// finds it (status ok, or off_cornea where the surface goes on smoothly).
-using Mirror = std::function<Reflection(const Point3& source, const Point3& target)>;
+using purkinje::Mirror;  // specular.h
 
 // Power and the LED disc's image for a reflection (status ok) off
-// `mirror`, whose inside has index `inner_index`, from central differences
-// of the mirror's own reflections: how the incident direction turns as the
-// target slides over the aperture, and how the image moves as the source
-// slides over the LED's disc.
-GlintRadiometry mirror_radiometry(const Mirror& mirror, double inner_index, const Illuminator& light,
-                                  const Camera& camera, const Reflection& reflection);
+// `mirror`, of Fresnel reflectance `reflectance` there, from central
+// differences of the mirror's own reflections: how the incident direction
+// turns as the target slides over the aperture, and how the image moves
+// as the source slides over the LED's disc. With `lenses` (a scene with
+// spectacle lenses), the highlight as the camera sees it through them
+// (see_highlight): the light's direction as it leaves the LED differenced,
+// the image where the camera's leg leaves its lens, the power times the
+// legs' Fresnel transmittance.
+GlintRadiometry mirror_radiometry(const Mirror& mirror, double reflectance, const Illuminator& light,
+                                  const Camera& camera, const Reflection& reflection,
+                                  const Scene* lenses = nullptr);
+
+// A spectacle lens's ghost of `light` (solve_lens_reflection toward the
+// camera's centre, status ok): mirror_radiometry of the lens surface's own
+// reflections, seen where they leave the front surface; the back surface's
+// reflectance times the front's transmittance in and out.
+GlintRadiometry ghost_radiometry(const SpectacleLens& lens, LensSurface surface, const Illuminator& light,
+                                 const Camera& camera);
 
 // A rough mirror's spread (px^2: u-u, u-v, v-v) of the highlight at
 // `reflection`, for facets tilted by a Gaussian of `sigma_rad` per axis:

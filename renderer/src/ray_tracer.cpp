@@ -34,6 +34,7 @@
 // Ignoring the cornea (occluded_except_cornea): a flag in the query context
 // read by the cornea's callbacks; when this Embree build supports ray
 // masks, the cornea also gets its own mask bit so that traversal skips it.
+// Spectacle lenses the same, skipped by every occlusion query.
 //
 // Lashes: one user primitive per capsule, intersected in double precision
 // like the eyes' surfaces (not Embree's curves, which are intersected in
@@ -70,11 +71,13 @@ namespace {
 constexpr unsigned kCorneaMask = 1u;
 constexpr unsigned kOtherMask = 2u;
 constexpr unsigned kLashMask = 4u;
+constexpr unsigned kLensMask = 8u;
 
 // Which surfaces a query skips.
 struct Skip {
   bool cornea = false;
   bool lashes = false;
+  bool lenses = false;
 };
 
 // Embree hands the context pointer back to the callbacks, so extending it
@@ -143,10 +146,16 @@ void bounds_callback(const RTCBoundsFunctionArguments* args) {
   set_bounds(static_cast<const PlacedSurface*>(args->geometryUserPtr)->world_bounds(), args->bounds_o);
 }
 
+// Whether the query looks through this surface (without ray masks, the
+// callbacks' own test).
+bool skipped(const Skip& skip, const PlacedSurface& surface) {
+  return (skip.cornea && surface.is_cornea()) || (skip.lenses && surface.kind() == Surface::spectacle_lens);
+}
+
 void intersect_callback(const RTCIntersectFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
   const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
-  if (query->skip.cornea && surface.is_cornea()) return;
+  if (skipped(query->skip, surface)) return;
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
   RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
   for (unsigned i = 0; i < args->N; ++i) {
@@ -168,7 +177,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
 void occluded_callback(const RTCOccludedFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
   const auto& surface = *static_cast<const PlacedSurface*>(args->geometryUserPtr);
-  if (query->skip.cornea && surface.is_cornea()) return;
+  if (skipped(query->skip, surface)) return;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
@@ -389,6 +398,7 @@ struct RayTracer::Impl {
     ray.mask = ~0u;
     if (masks && skip.cornea) ray.mask &= ~kCorneaMask;
     if (masks && skip.lashes) ray.mask &= ~kLashMask;
+    if (masks && skip.lenses) ray.mask &= ~kLensMask;
     ray.id = 0;  // the lane
     ray.flags = 0;
     if constexpr (kOcclusion) {
@@ -469,9 +479,11 @@ struct RayTracer::Impl {
     return true;
   }
 
+  // Spectacle lenses never occlude (RayTracer::occluded).
   bool occluded(const Point3& from, const Point3& to, Skip skip, RTCScene in = nullptr) const {
     Lane lane;
     if (!segment_lane(from, to, lane)) return false;
+    skip.lenses = true;
     run<true>(lane, skip, in);
     return lane.found();
   }
@@ -480,6 +492,7 @@ struct RayTracer::Impl {
   Surface occluder(const Point3& from, const Point3& to, Skip skip) const {
     Lane lane;
     if (!segment_lane(to, from, lane)) return Surface::none;
+    skip.lenses = true;
     run<false>(lane, skip);
     return lane.surface ? lane.surface->kind() : lane.mesh ? lane.mesh->kind() : lane.lashes ? Surface::lash : Surface::none;
   }
@@ -552,7 +565,11 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     rtcSetGeometryBoundsFunction(geometry, &bounds_callback, nullptr);
     rtcSetGeometryIntersectFunction(geometry, &intersect_callback);
     rtcSetGeometryOccludedFunction(geometry, &occluded_callback);
-    if (impl.masks) rtcSetGeometryMask(geometry, surface->is_cornea() ? kCorneaMask : kOtherMask);
+    if (impl.masks) {
+      rtcSetGeometryMask(geometry, surface->is_cornea()                           ? kCorneaMask
+                                   : surface->kind() == Surface::spectacle_lens ? kLensMask
+                                                                                : kOtherMask);
+    }
     rtcCommitGeometry(geometry);
     rtcAttachGeometry(impl.scene, geometry);
     rtcReleaseGeometry(geometry);

@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "integrator.h"
+#include "lens_light.h"
 #include "sampler.h"
 #include "purkinje/renderer/radiometry.h"
 #include "purkinje/renderer/sensor_model.h"
@@ -230,7 +231,7 @@ class IrisPhotonMap {
         return;
       }
       case Scattering::interface: {
-        if (depth >= kMaxSpecularDepth) return;
+        if (depth >= max_depth_) return;
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const double w_t = weight * (1 - c.reflectance), w_r = weight * c.reflectance;
         if (c.transmitted && w_t > kMinBranchWeight) {
@@ -256,13 +257,14 @@ class IrisPhotonMap {
   int side_ = 0;
   std::vector<double> irradiance_;
   std::vector<bool> inside_;  // the bin reaches inside the shell
+  int max_depth_ = specular_depth(scene_, kMaxSpecularDepth);
 };
 
 class ReferenceIntegrator final : public PathIntegrator {
  public:
   ReferenceIntegrator(const Scene& scene, const Camera& camera, const RayTracer& tracer,
                       const RenderOptions& options)
-      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)),
+      : scene_(scene), camera_(camera), tracer_(tracer), lights_(lights_of(scene, camera)), seen_(scene, lights_),
         seed_(options.seed) {
     iris_.resize(scene.eyes.size());
     for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
@@ -315,7 +317,7 @@ class ReferenceIntegrator final : public PathIntegrator {
         return;
       }
       case Scattering::interface: {
-        if (depth >= kMaxSpecularDepth) return;
+        if (depth >= max_depth_) return;
         const InterfaceCrossing c = cross_interface(scene_, ray, hit);
         const Ray reflected{hit.point + c.facing * kRayOffsetMm, c.reflected.value_or(ray.direction)};
         if (bounces == 0) {  // the camera's own chain: both branches
@@ -344,7 +346,7 @@ class ReferenceIntegrator final : public PathIntegrator {
   // there (manifold next-event estimation), plus the photons that reached
   // it after reflecting inside the cornea.
   double iris_irradiance(const Hit& hit, std::size_t k, PathSampler& rng) const {
-    const Light& l = lights_[k];
+    const Light l = seen_.at(hit.point, k);
     const Eye& eye = scene_.eyes[hit.eye];
     const double u = rng.next(), v = rng.next();
     const Point3 q = point_on_disc(l.position, eye.cornea_center() - l.position, l.emitter_radius_mm, u, v);
@@ -360,7 +362,8 @@ class ReferenceIntegrator final : public PathIntegrator {
   void direct_light(const Hit& hit, double scaled_albedo, PathSampler& rng, Contribution& out) const {
     const Vector3 n = facing_normal(hit);
     const Point3 origin = hit.point + n * kRayOffsetMm;
-    for (const Light& l : lights_) {
+    for (std::size_t k = 0; k < lights_.size(); ++k) {
+      const Light l = seen_.at(hit.point, k);
       const double u = rng.next(), v = rng.next();
       const Point3 q = point_on_disc(l.position, hit.point - l.position, l.emitter_radius_mm, u, v);
       const Vector3 to_light = q - hit.point;
@@ -397,6 +400,8 @@ class ReferenceIntegrator final : public PathIntegrator {
   const Camera& camera_;
   const RayTracer& tracer_;
   std::vector<Light> lights_;
+  SeenLights seen_;  // the lights through spectacle lenses
+  int max_depth_ = specular_depth(scene_, kMaxSpecularDepth);
   std::uint64_t seed_;
   std::vector<std::vector<IrisPhotonMap>> iris_;  // [eye][light]
 };

@@ -350,7 +350,7 @@ void image_glints(const Scene& scene, int camera_index, SceneTruth& truth, const
       image.status = g.status;
       const Illuminator& light = scene.illuminators[g.illuminator];
       if (g.status == PathStatus::ok) {
-        image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection);
+        image.radiometry = glint_radiometry(scene.eyes[view.eye], light, camera, g.reflection, &scene);
         if (image.radiometry.status != PathStatus::ok) g.status = image.status = image.radiometry.status;
         // The natural falloff is in the power through the aperture; the
         // lens's own vignetting is not.
@@ -380,9 +380,23 @@ void add_meniscus_highlights(const Scene& scene, int camera_index, const std::ve
       if (view.camera != camera_index || view.eye != meniscus.eye()) continue;
       const Eye& eye = scene.eyes[view.eye];
       for (int l = 0; l < static_cast<int>(scene.illuminators.size()); ++l) {
-        for (const Reflection& r : meniscus.highlights(scene.illuminators[l].position, camera.center())) {
+        const Point3& light = scene.illuminators[l].position;
+        for (const Reflection& r : meniscus.highlights(light, camera.center())) {
+          if (scene.spectacle_lenses.empty()) {
+            view.distractors.push_back(
+                distractor_truth(DistractorKind::tear_meniscus, r, scene, eye, l, camera, options));
+            continue;
+          }
+          // Through the lenses: the same circle's highlight, found again
+          // with the legs' directions (see_highlight); gone when the lens
+          // moves it beyond that circle's reach.
+          const double circle = meniscus.circle_of(r.point);
+          const SeenHighlight seen = see_highlight(scene, light, camera.center(), [&](const Point3& s, const Point3& t) {
+            return meniscus.highlight_near(circle, s, t);
+          });
+          if (seen.reflection.status != PathStatus::ok) continue;
           view.distractors.push_back(
-              distractor_truth(DistractorKind::tear_meniscus, r, scene, eye, l, camera, options));
+              distractor_truth(DistractorKind::tear_meniscus, seen, scene, eye, l, camera, options));
         }
       }
     }
@@ -396,7 +410,8 @@ void add_meniscus_highlights(const Scene& scene, int camera_index, const std::ve
 // each pixel) and added to `light`, which the caller blurs. A meniscus's
 // as a glint's, through the optics (`psf`) and whole, into `sharp`: the
 // strip of tears it lies on is narrower than a pixel, and a mask drawn
-// before the point spread would round the highlight to its pixel.
+// before the point spread would round the highlight to its pixel. A
+// spectacle lens's ghost the same way: the lens is clear.
 // Described in `images` in the truth's order, with the electrons the image
 // holds. A highlight whose radiometry fails is not drawn, and its label
 // says why.
@@ -416,14 +431,19 @@ void image_distractors(const Scene& scene, int camera_index, const std::vector<T
       const bool on_sclera = d.kind == DistractorKind::sclera;
       if (d.status == PathStatus::ok) {
         if (on_sclera) {
-          image.radiometry = scleral_highlight_radiometry(eye, *eye.appearance().tear_film, led, camera, d.reflection);
+          image.radiometry =
+              scleral_highlight_radiometry(eye, *eye.appearance().tear_film, led, camera, d.reflection, &scene);
+        } else if (d.spectacle_lens >= 0) {
+          const LensSurface surface =
+              d.kind == DistractorKind::spectacle_lens_front ? LensSurface::front : LensSurface::back;
+          image.radiometry = ghost_radiometry(scene.spectacle_lenses[d.spectacle_lens], surface, led, camera);
         } else {
           const auto meniscus = std::find_if(menisci.begin(), menisci.end(),
                                              [&](const TearMeniscus& m) { return m.eye() == view.eye; });
           // Only this render's menisci label such highlights.
           image.radiometry = meniscus == menisci.end()
                                  ? failed_radiometry(PathStatus::not_converged)
-                                 : meniscus_highlight_radiometry(*meniscus, led, camera, d.reflection);
+                                 : meniscus_highlight_radiometry(*meniscus, led, camera, d.reflection, &scene);
         }
         if (image.radiometry.status != PathStatus::ok) d.status = image.status = image.radiometry.status;
         const double whole = image.radiometry.power_w * electrons_per_watt(camera.sensor(), led.wavelength_nm) *
@@ -569,7 +589,7 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
   pool.give(film.diffuse_electrons());
   // Distractors: light on the sclera, through the same optics; their mask
   // only for a scene that has some (its files keep their planes otherwise).
-  const bool distractors = scene_has_tear_film(scene);
+  const bool distractors = scene_has_distractors(scene);
   ImagePlane distractor_total;
   if (distractors) {
     ImagePlane light = pool.take(), spot = pool.take(), sharp = pool.take();

@@ -117,8 +117,9 @@ json labels_document(const Scene& scene, const RenderResult& result, const Rende
     glints.push_back(out);
   }
   render["glints"] = glints;
-  // Only when some eye has a tear film: each view's distractors in order.
-  if (scene_has_tear_film(scene)) {
+  // Only when some eye has a tear film or the scene spectacle lenses: each
+  // view's distractors in order.
+  if (scene_has_distractors(scene)) {
     json distractors = json::array();
     for (const GlintImage& d : result.distractors) {
       const double* c = d.radiometry.roughness_cov_px2;
@@ -164,7 +165,7 @@ std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions
   if (options.per_light_glint_masks) {
     for (const Illuminator& light : scene.illuminators) names.push_back("glint." + light.name);
   }
-  if (scene_has_tear_film(scene)) names.push_back("distractor");
+  if (scene_has_distractors(scene)) names.push_back("distractor");
   return names;
 }
 

@@ -21,6 +21,7 @@ const char* to_string(Surface s) {
     case Surface::cornea_posterior: return "cornea_posterior";
     case Surface::mesh: return "mesh";
     case Surface::lash: return "lash";
+    case Surface::spectacle_lens: return "spectacle_lens";
   }
   return "unknown";
 }
@@ -357,6 +358,29 @@ Box PlacedLashes::world_bounds() const {
   return all;
 }
 
+namespace {
+
+// A spectacle lens: its front, back and edge in the lens frame, placed with
+// their lens's index where other surfaces hold their eye's.
+void add_spectacle_lens(SurfaceList& surfaces, int index, const SpectacleLens& lens) {
+  try {
+    check_spectacle_lens(lens);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("RayTracer: spectacle_lenses[" + std::to_string(index) + "] (\"" + lens.name +
+                                "\"): " + e.what());
+  }
+  const auto frame = std::make_shared<const Frame>(lens.world_from_lens);
+  const auto [a, b] = lens.outline_semi_axes_mm;
+  const surfaces::LensCap front{lens.front_radius_mm, 0.0, a, b, 1.0};
+  const surfaces::LensCap back{lens.back_radius_mm, -lens.center_thickness_mm, a, b, -1.0};
+  surfaces.push_back(std::make_unique<Placed<surfaces::LensCap>>(Surface::spectacle_lens, index, frame, front));
+  surfaces.push_back(std::make_unique<Placed<surfaces::LensCap>>(Surface::spectacle_lens, index, frame, back));
+  surfaces.push_back(
+      std::make_unique<Placed<surfaces::LensEdge>>(Surface::spectacle_lens, index, frame, surfaces::LensEdge{front, back}));
+}
+
+}  // namespace
+
 SceneGeometry build_scene_geometry(const Scene& scene) {
   SceneGeometry geometry;
   for (std::size_t i = 0; i < scene.eyes.size(); ++i) {
@@ -364,6 +388,9 @@ SceneGeometry build_scene_geometry(const Scene& scene) {
     const std::size_t eyeball_begin = geometry.surfaces.size();
     add_eyeball(geometry.surfaces, index, scene.eyes[i]);
     if (scene.eyes[i].appearance().eyelids) add_lids(geometry, index, scene, eyeball_begin);
+  }
+  for (std::size_t i = 0; i < scene.spectacle_lenses.size(); ++i) {
+    add_spectacle_lens(geometry.surfaces, static_cast<int>(i), scene.spectacle_lenses[i]);
   }
   for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
     check_mesh(static_cast<int>(i), scene.meshes[i]);

@@ -135,6 +135,7 @@ class PlacedSurface {
   virtual ~PlacedSurface() = default;
 
   Surface kind() const { return kind_; }
+  // The eye it belongs to; for Surface::spectacle_lens, the lens.
   int eye() const { return eye_; }
   bool is_cornea() const {
     return kind_ == Surface::cornea_anterior || kind_ == Surface::cornea_posterior;
@@ -384,7 +385,7 @@ inline Hit hit_of(const Ray& ray, const Lane& lane) {
     hit.front_face = dot(ray.direction, hit.normal) < 0;
   } else {
     hit.surface = lane.surface->kind();
-    hit.eye = lane.surface->eye();
+    (hit.surface == Surface::spectacle_lens ? hit.lens : hit.eye) = lane.surface->eye();
     hit.normal = lane.surface->world_normal(lane.local_point);
     hit.front_face = dot(ray.direction, hit.normal) < 0;
   }

@@ -179,4 +179,50 @@ Box EyelidSphere::bounds() const {
           {r, r, std::min(r, max_z_mm + kSeamOverlapMm)}};
 }
 
+double LensCap::z_at(double x, double y) const {
+  const double r2 = x * x + y * y;
+  return vertex_z_mm - r2 / (radius_mm + std::sqrt(std::max(0.0, radius_mm * radius_mm - r2)));
+}
+
+bool LensCap::first_hit(const Segment& s, double& t) const {
+  const Vector3& d = s.direction;
+  const Vector3 m = s.origin - Point3{0, 0, vertex_z_mm - radius_mm};
+  const double a = d.squared_norm(), half_b = dot(m, d), c = m.squared_norm() - radius_mm * radius_mm;
+  const double centre_z = vertex_z_mm - radius_mm;
+  const double ex = 1 + kSeamOverlapMm / semi_x_mm, ey = 1 + kSeamOverlapMm / semi_y_mm;
+  return first_kept_root(
+      s, a, half_b, c,
+      [&](const Point3& p) {
+        const double u = p.x / (semi_x_mm * ex), v = p.y / (semi_y_mm * ey);
+        return p.z > centre_z && u * u + v * v <= 1;
+      },
+      t);
+}
+
+Box LensCap::bounds() const {
+  const double r = std::max(semi_x_mm, semi_y_mm);
+  return {{-semi_x_mm, -semi_y_mm, z_at(r, 0)}, {semi_x_mm, semi_y_mm, vertex_z_mm}};
+}
+
+bool LensEdge::first_hit(const Segment& s, double& t) const {
+  const Vector3& d = s.direction;
+  const Point3& o = s.origin;
+  const double ia = 1 / (front.semi_x_mm * front.semi_x_mm), ib = 1 / (front.semi_y_mm * front.semi_y_mm);
+  const double a = d.x * d.x * ia + d.y * d.y * ib;
+  if (a == 0.0) return false;  // along the axis: parallel to the wall
+  const double half_b = o.x * d.x * ia + o.y * d.y * ib;
+  const double c = o.x * o.x * ia + o.y * o.y * ib - 1;
+  return first_kept_root(
+      s, a, half_b, c,
+      [&](const Point3& p) {
+        return p.z >= back.z_at(p.x, p.y) - kSeamOverlapMm && p.z <= front.z_at(p.x, p.y) + kSeamOverlapMm;
+      },
+      t);
+}
+
+Box LensEdge::bounds() const {
+  const Box f = front.bounds(), b = back.bounds();
+  return united(f, b);
+}
+
 }  // namespace purkinje::renderer::surfaces

@@ -182,4 +182,34 @@ struct EyelidSphere {
   Box bounds() const;
 };
 
+// A spectacle lens's surface (spectacle_lens.h, in the lens frame): the
+// sphere of radius R whose vertex lies on the z axis at vertex_z_mm (its
+// centre R below), within the elliptic outline x^2/a^2 + y^2/b^2 <= 1.
+// Normal out of the glass: the sphere's outward normal for the front
+// surface (out_of_glass = 1), inward for the back (-1).
+struct LensCap {
+  double radius_mm = 100.0;
+  double vertex_z_mm = 0.0;
+  double semi_x_mm = 25.0, semi_y_mm = 20.0;
+  double out_of_glass = 1.0;
+
+  bool first_hit(const Segment& s, double& t) const;
+  Vector3 normal(const Point3& p) const { return (p - Point3{0, 0, vertex_z_mm - radius_mm}) * out_of_glass; }
+  Box bounds() const;
+  // The surface's z at (x, y), inside the sphere's radius.
+  double z_at(double x, double y) const;
+};
+
+// A spectacle lens's edge: the elliptic cylinder through its outline,
+// between its back and front surfaces. Normal out of the glass (outward).
+struct LensEdge {
+  LensCap front, back;
+
+  bool first_hit(const Segment& s, double& t) const;
+  Vector3 normal(const Point3& p) const {
+    return {p.x / (front.semi_x_mm * front.semi_x_mm), p.y / (front.semi_y_mm * front.semi_y_mm), 0.0};
+  }
+  Box bounds() const;
+};
+
 }  // namespace purkinje::renderer::surfaces

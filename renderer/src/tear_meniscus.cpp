@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "face_mesh.h"
+#include "purkinje/models/truth.h"
 #include "mirror_radiometry.h"
 #include "scene_geometry.h"
 
@@ -368,7 +369,7 @@ Reflection TearMeniscus::highlight_near(double x0, const Point3& source_world, c
 }
 
 GlintRadiometry meniscus_highlight_radiometry(const TearMeniscus& meniscus, const Illuminator& light,
-                                              const Camera& camera, const Reflection& highlight) {
+                                              const Camera& camera, const Reflection& highlight, const Scene* lenses) {
   check_radiometry_inputs(light, camera);
   if (highlight.status != PathStatus::ok) return failed_radiometry(highlight.status);
   // Its circle, once: every neighbour the differences ask for is sought
@@ -379,11 +380,14 @@ GlintRadiometry meniscus_highlight_radiometry(const TearMeniscus& meniscus, cons
   };
   // The highlight as the meniscus itself finds it: a label from elsewhere
   // (or another meniscus) has no radiometry here.
-  const Reflection again = mirror(light.position, camera.center());
+  const Reflection again = lenses && !lenses->spectacle_lenses.empty()
+                               ? see_highlight(*lenses, light.position, camera.center(), mirror).reflection
+                               : mirror(light.position, camera.center());
   if (again.status != PathStatus::ok || distance(again.point, highlight.point) > 1e-9) {
     return failed_radiometry(PathStatus::not_converged);
   }
-  return mirror_radiometry(mirror, kTearFilmIndex, light, camera, highlight);
+  return mirror_radiometry(mirror, fresnel_reflectance(std::cos(highlight.incidence_rad), 1.0, kTearFilmIndex), light,
+                           camera, highlight, lenses);
 }
 
 ShellOffset eye_shell_offset(const Eye& eye, const Pose& world_from_head) {

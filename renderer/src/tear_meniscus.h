@@ -115,9 +115,10 @@ ShellOffset eye_shell_offset(const Eye& eye, const Pose& world_from_head);
 // Power and the LED disc's image of a highlight on `meniscus` (as
 // glint_radiometry's, from the meniscus's own reflections), off the tears
 // (kTearFilmIndex). No roughness spread: a free surface of liquid is
-// optically smooth.
+// optically smooth. Through `lenses` as glint_radiometry.
 GlintRadiometry meniscus_highlight_radiometry(const TearMeniscus& meniscus, const Illuminator& light,
-                                              const Camera& camera, const Reflection& highlight);
+                                              const Camera& camera, const Reflection& highlight,
+                                              const Scene* lenses = nullptr);
 
 // The tear menisci of `scene`'s eyes that have a face and a tear film
 // with a meniscus, in eye order.

@@ -1025,6 +1025,68 @@ TEST(SceneFile, BundledGlassesSceneLoadsTheFrameInFrontOfTheEye) {
   EXPECT_GT(scene.eyes[0].corneal_apex().z - 581.5, 10);
 }
 
+// A minimal scene with one spectacle lens given by `lens` (its JSON).
+std::string scene_with_lens(const std::string& lens) {
+  return R"({ "format": 1,
+    "cameras": [ { "resolution_px": [64, 48], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {} } ],
+    "spectacle_lenses": [ )" + lens + " ] }";
+}
+
+TEST(SceneFile, ASpectacleLensIsShapedByItsPrescription) {
+  // -3 D on Vogel's base (-3 / 4 + 6 = 5.25 D), 2 mm thick; +2 D on
+  // 2 / 2 + 6 = 7 D, thick enough for a 1 mm edge at the 25 mm semi-axis.
+  for (const double power : {-3.0, 2.0}) {
+    const Scene scene = parse_scene(scene_with_lens(R"({ "position_mm": [0, 0, 578], "rotation_vector_deg": [180, 0, 0],
+        "power_d": )" + std::to_string(power) + " }"),
+                                    "scene.json", ".");
+    ASSERT_EQ(scene.spectacle_lenses.size(), 1u);
+    const SpectacleLens& lens = scene.spectacle_lenses[0];
+    EXPECT_EQ(lens.name, "lens0");
+    EXPECT_NEAR(back_vertex_power_d(lens), power, 1e-12);
+    EXPECT_NEAR(front_surface_power_d(lens), power > 0 ? 7 : 5.25, 1e-12);
+    if (power < 0) EXPECT_EQ(lens.center_thickness_mm, 2);
+    if (power > 0) EXPECT_NEAR(lens_thickness_mm(lens, 25, 0), 1, 1e-6);
+    // Lens +z (out of its front) toward the camera, +y up (world -y).
+    EXPECT_NEAR((lens.world_from_lens * Vector3{0, 0, 1}).z, -1, 1e-15);
+    EXPECT_NEAR((lens.world_from_lens * Vector3{0, 1, 0}).y, -1, 1e-15);
+  }
+  // Given by its radii, as a dump writes it.
+  const Scene radii = parse_scene(scene_with_lens(R"({ "name": "r", "position_mm": [0, 0, 578], "rotation_vector_deg": [180, 0, 0],
+      "front_radius_mm": 100, "back_radius_mm": 80, "center_thickness_mm": 1.5, "refractive_index": 1.586,
+      "outline_semi_axes_mm": [20, 15] })"), "scene.json", ".");
+  const SpectacleLens& r = radii.spectacle_lenses[0];
+  EXPECT_EQ(r.front_radius_mm, 100);
+  EXPECT_EQ(r.back_radius_mm, 80);
+  EXPECT_EQ(r.refractive_index, 1.586);
+  EXPECT_EQ(r.outline_semi_axes_mm[1], 15);
+}
+
+TEST(SceneFile, RejectsBadSpectacleLensesByKeyAndRule) {
+  const std::string place = R"("position_mm": [0, 0, 578], "rotation_vector_deg": [180, 0, 0], )";
+  const std::pair<std::string, std::string> cases[] = {
+      {place + R"("power_d": 8, "base_curve_d": 4)", "spectacle_lenses[0].power_d = 8: a back vertex power of 8 D"},
+      {place + R"("power_d": -30)", "spectacle_lenses[0].power_d = -30"},
+      {place + R"("power_d": -3, "front_radius_mm": 100)", "spectacle_lenses[0]"},
+      {place + R"("front_radius_mm": 100, "back_radius_mm": 80)", "center_thickness_mm"},
+      {place + R"("power_d": 4, "center_thickness_mm": 0.5)", "edge"},
+      {R"("position_mm": [0, 0, 578], "power_d": -3)", "rotation_vector_deg"},
+      {place + R"("power_d": -3, "outline_semi_axes_mm": [25])", "outline_semi_axes_mm"},
+      {place + R"("power_d": -3, "refractive_index": 1)", "refractive_index"},
+      {place + R"("power_d": -3, "colour": "red")", "colour"},
+  };
+  for (const auto& [lens, expected] : cases) {
+    const std::string error = parse_error(scene_with_lens("{ " + lens + " }"));
+    EXPECT_NE(error.find(expected), std::string::npos) << lens << "\n" << error;
+    EXPECT_EQ(error.find("scene.json: "), 0u) << error;
+  }
+  EXPECT_NE(parse_error(scene_with_lens(R"({ "name": "a", )" + place + R"("power_d": -3 }, { "name": "a", )" + place +
+                                        R"("power_d": -3 })"))
+                .find("duplicate name"),
+            std::string::npos);
+}
+
 // One mistake per file; the expected message for each. A file without an
 // entry here, or an entry without a file, fails MalformedFilesAllHaveExpectations.
 const std::map<std::string, std::string> kMalformed = {

@@ -336,5 +336,39 @@ TEST(TruthThroughGlasses, ALensThatNoPathCrossesChangesNoGlintOrPupilLabel) {
   EXPECT_TRUE(bare.views[0].distractors.empty());
 }
 
+// ------------------------------------------------------- light through a lens
+
+TEST(LightThroughLens, IsTheParaxialImageOfALightOnTheAxisWithItsVergenceFocusing) {
+  // An untilted lens, the light 600 mm in front of its front vertex and the
+  // point 12 mm behind its back vertex, both on the axis. Vergences (D):
+  // V1 = -1/0.6 at the front, V1' = V1 + F1, V2 = V1' / (1 - t/n V1') at
+  // the back, V2' = V2 + F2; the image lies 1/|V2'| in front of the back
+  // vertex (V2' < 0: diverging). A ray leaving the light at angle u is at
+  // height 0.6 u at the front, (1 - t/n V1') times that at the back and
+  // (1 - d V2') times that d behind it, so the solid angle per area at the
+  // point is 1 / (0.6 (1 - t/n V1') (1 - d V2'))^2 (in m).
+  for (const double power : {-6.0, -3.0, 2.0}) {
+    const Point3 apex{0, 0, 592.2};
+    SpectacleLens lens = minus_lens(apex, 12, 0, {});
+    lens.center_thickness_mm = power > 0 ? 3.5 : 2;
+    lens.back_radius_mm = back_radius_for_power_mm(power, lens.front_radius_mm, lens.center_thickness_mm,
+                                                   lens.refractive_index);
+    const double t = lens.center_thickness_mm / 1000, n = lens.refractive_index, d = 0.012;
+    const Point3 front_vertex = lens.world_from_lens * Point3{0, 0, 0};
+    const Point3 light = front_vertex + Vector3{0, 0, -600};
+    const Point3 near = front_vertex + Vector3{0, 0, 1000 * (t + d)};
+    const double f1 = 1000 * (n - 1) / lens.front_radius_mm, f2 = 1000 * (1 - n) / lens.back_radius_mm;
+    const double v1 = -1 / 0.6 + f1, v2 = v1 / (1 - t / n * v1) + f2;
+    const double image_from_near_mm = 1000 * (d - 1 / v2);  // in front (> 0) when v2 < 0
+    const double per_area = 1 / std::pow(0.6 * (1 - t / n * v1) * (1 - d * v2), 2) / 1e6;  // sr / mm^2
+    const LightThroughLens l = light_through_lens(lens, light, near);
+    ASSERT_EQ(l.status, PathStatus::ok);
+    // The plus lens's light converges: a negative vergence.
+    EXPECT_NEAR(l.vergence_per_mm * image_from_near_mm, 1, 1e-5) << power;
+    EXPECT_NEAR(l.solid_angle_per_area / per_area, 1, 1e-5) << power;
+    EXPECT_LT(angle_between(l.passage.leaving, light - near), 1e-12);
+  }
+}
+
 }  // namespace
 }  // namespace purkinje

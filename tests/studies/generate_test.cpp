@@ -109,7 +109,8 @@ const char* const kEveryParameter = R"("gaze": {"cone_deg": 20}, "parameters": {
     "read_noise_e": {"uniform": [2, 8]}, "noise": {"choice": [false, true]},
     "focus_distance_mm": {"uniform": [500, 700]}, "bits": {"choice": [8, 12]},
     "illuminators": {"led_left": {"power_scale": {"uniform": [0.5, 1]}, "on": {"choice": [false, true]}}},
-    "meshes": {"glasses_frame": {"on": {"choice": [false, true]}}}})";
+    "meshes": {"glasses_frame": {"on": {"choice": [false, true]}}},
+    "spectacle_lenses": {"right_lens": {"on": {"choice": [false, true]}}}})";
 
 constexpr double kDeg = std::numbers::pi / 180;
 
@@ -277,6 +278,12 @@ TEST_F(EveryParameter, LightsAndSensorAreTheDrawnOnes) {
   expect_reaches("noise", [](const json& l, double v) { EXPECT_EQ(sensor(l).at("noise").get<bool>(), v != 0); });
   expect_reaches("bits", [](const json& l, double v) { EXPECT_EQ(sensor(l).at("bits").get<double>(), v); });
   expect_reaches("mesh.glasses_frame.on", [](const json&, double v) { EXPECT_TRUE(v == 0 || v == 1); });
+  // A lens left out mirrors nothing: its ghosts are in the labels or not.
+  expect_reaches("spectacle_lens.right_lens.on", [](const json& l, double v) {
+    int ghosts = 0;
+    for (const json& d : l.at("views").at(0).at("distractors")) ghosts += d.value("spectacle_lens_name", "") == "right_lens";
+    EXPECT_EQ(ghosts > 0, v != 0);
+  });
 }
 
 TEST_F(EveryParameter, TheTableRecordsTheFilesAndTheTruth) {

@@ -241,7 +241,7 @@ TEST(Scorer, TellsTheFalseGlintsThatLieOnALabelledDistractor) {
     }
   }
   EXPECT_EQ(on, 1);
-  EXPECT_NE(score_table(s).find("false glints on a labelled distractor (a highlight on the tears): 1 of 3"), std::string::npos)
+  EXPECT_NE(score_table(s).find("false glints on a labelled distractor (a highlight that is no glint): 1 of 3"), std::string::npos)
       << score_table(s);
   EXPECT_NE(score_csv(s).find("\nwet.png,glint,,,false_positive,,,303,100,,,,,,,1\n"), std::string::npos) << score_csv(s);
   EXPECT_EQ(nlohmann::json::parse(score_json(s))["glints"]["false_positives_on_distractors"], 1);

@@ -443,7 +443,7 @@ std::string score_table(const Score& score) {
         << " (counted as missed and as false positives: the wrong outline, an iris for a pupil)\n";
   }
   if (score.glints.false_positives_on_distractors > 0) {
-    out << "false glints on a labelled distractor (a highlight on the tears): " << score.glints.false_positives_on_distractors
+    out << "false glints on a labelled distractor (a highlight that is no glint): " << score.glints.false_positives_on_distractors
         << " of " << score.glints.false_positives << "\n";
   }
   if (score.glints.not_counted + score.pupils.not_counted > 0) {

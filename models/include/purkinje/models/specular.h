@@ -6,6 +6,7 @@
 //
 // A path that does not exist is a status, never a NaN.
 
+#include <functional>
 #include <optional>
 
 #include "purkinje/models/eye.h"
@@ -54,6 +55,10 @@ struct Refraction {
   int iterations = 0;
 };
 
+// A mirror as its solver finds its reflections: from a source toward a
+// target (status ok, or off_cornea where the surface goes on smoothly).
+using Mirror = std::function<Reflection(const Point3& source, const Point3& target)>;
+
 // Law of reflection, anterior cornea only (the first Purkinje image).
 // `source` and `target` must lie outside the cornea.
 Reflection solve_reflection(const Eye& eye, const Point3& source, const Point3& target);
@@ -83,11 +88,34 @@ struct LensPassage {
   // opposite sides, or not finite).
   PathStatus status = PathStatus::no_solution;
   Point3 first, second;  // where the path crosses the lens's surfaces, `from`'s side first
+  // Their normals, out of the glass.
+  UnitVector3 first_normal = UnitVector3::unit_z(), second_normal = UnitVector3::unit_z();
   UnitVector3 leaving = UnitVector3::unit_z();   // the direction in which the path leaves `from`
+  UnitVector3 inside = UnitVector3::unit_z();    // in the glass, from first to second
   UnitVector3 arriving = UnitVector3::unit_z();  // and arrives at `to`
   int iterations = 0;
 };
 LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from, const Point3& to);
+
+// A point light as seen through a spectacle lens from a point behind it
+// (`near`): the path of its light there (`passage`, from `near` to the
+// light), the rays' vergence there, and the solid angle at the light per
+// unit area there across the rays, so that the irradiance there is
+// I T solid_angle_per_area for a light of intensity I and the surfaces'
+// Fresnel transmittance T (the caller's, from `passage`). From central
+// differences of passages 1e-4 of the distance to the light beside `near`
+// (their truncation is about (step / lens radius)^2: 1e-6 on the axis).
+struct LightThroughLens {
+  PathStatus status = PathStatus::no_solution;  // the passages': ok, or why not
+  LensPassage passage;
+  // 1/mm: > 0 for light diverging from the lens's (virtual) image of the
+  // light 1/vergence in front of `near`, < 0 for light converging to a
+  // real image behind it (a plus lens stronger than the light's own
+  // vergence); an oblique lens's two principal vergences averaged.
+  double vergence_per_mm = 0;
+  double solid_angle_per_area = 0;  // sr/mm^2
+};
+LightThroughLens light_through_lens(const SpectacleLens& lens, const Point3& light, const Point3& near);
 
 // Light from `source` mirrored by one surface of a spectacle lens toward
 // `target`, both in front of the lens: a ghost image of the light. The

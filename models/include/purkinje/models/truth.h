@@ -3,6 +3,7 @@
 // and the eye's axes, as the camera sees them.
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "purkinje/models/camera.h"
@@ -145,6 +146,39 @@ SceneTruth compute_truth(const Scene& scene, const TruthOptions& options = {});
 // then to the light).
 DistractorTruth distractor_truth(DistractorKind kind, const Reflection& highlight, const Scene& scene,
                                  const Eye& eye, int light, const Camera& camera, const TruthOptions& options);
+// The same for a highlight seen through the scene's spectacle lenses
+// (see_highlight, declared below): its pixel where the camera's leg leaves
+// its lens, occlusion along each leg.
+struct SeenHighlight;
+DistractorTruth distractor_truth(DistractorKind kind, const SeenHighlight& highlight, const Scene& scene,
+                                 const Eye& eye, int light, const Camera& camera, const TruthOptions& options);
+
+// A path's leg from a point of an eye to a camera or a light outside it:
+// straight, or through the spectacle lens its straight segment crosses
+// (the first listed, when several do).
+struct Leg {
+  PathStatus status = PathStatus::ok;  // ok, or why the path has no such leg
+  int lens = -1;                       // into Scene::spectacle_lenses, when one is crossed
+  std::optional<LensPassage> passage;  // through it (status ok), from the eye's side
+};
+
+// A mirror's highlight as a camera sees it through the scene's spectacle
+// lenses (compute_truth's glints and scleral highlights): the mirror's own
+// path, run at virtual ends along its legs' true first segments until it
+// stops moving (within 1e-11 mm), and the legs.
+struct SeenHighlight {
+  Reflection reflection;  // on the mirror; its status the path's (a leg's when that fails)
+  Leg to_camera, to_light;
+  // Where the camera sees the highlight: where its leg leaves the lens.
+  Point3 seen_at() const { return to_camera.passage ? to_camera.passage->second : reflection.point; }
+  // The direction in which its light leaves the illuminator.
+  UnitVector3 from_light() const { return to_light.passage ? -to_light.passage->arriving : reflection.incident; }
+};
+SeenHighlight see_highlight(const Scene& scene, const Point3& light, const Point3& camera_center, const Mirror& mirror);
+
+// The eye a spectacle lens sits in front of: the one whose corneal apex
+// lies nearest its back vertex (-1 without eyes).
+int eye_behind(const Scene& scene, int lens);
 
 // Image of a point inside the eye seen through the cornea by `camera`, and
 // through any of the scene's spectacle lenses that the path crosses.

@@ -10,6 +10,7 @@
 #include "purkinje/models/camera.h"
 #include "purkinje/models/eye.h"
 #include "purkinje/models/illuminator.h"
+#include "purkinje/models/scene.h"
 #include "purkinje/models/specular.h"
 
 namespace purkinje::renderer {
@@ -38,9 +39,13 @@ struct GlintRadiometry {
 // From the solver's reflection toward the camera centre. The spreading of
 // the reflected beam is measured from the solver itself: reflections
 // toward points around the aperture give the solid angle, seen from the
-// LED, of the rays that enter it, so it holds for any cornea shape.
+// LED, of the rays that enter it, so it holds for any cornea shape. With
+// `lenses` (a scene with spectacle lenses), as the camera sees the glint
+// through them (its label's reflection, compute_truth's): the light's
+// spreading through the lenses measured the same way, times their
+// surfaces' Fresnel transmittance.
 GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const Camera& camera,
-                                 const Reflection& reflection);
+                                 const Reflection& reflection, const Scene* lenses = nullptr);
 // A scleral highlight (DistractorTruth, kind sclera) the same way, off the
 // tear film (kTearFilmIndex) on the sclera's sphere, with its roughness's
 // spread: to first order in the facets' tilt d (a tangent vector), the
@@ -50,8 +55,11 @@ GlintRadiometry glint_radiometry(const Eye& eye, const Illuminator& light, const
 // on them), so that an isotropic tilt of sigma per axis spreads it by
 // sigma^2 M^-2 there; the camera's projection carries that to pixels. The
 // power is the mirror's (a narrow lobe only moves where the light leaves).
+// Through `lenses` as glint_radiometry (the roughness's spread projected
+// as without them: a lens's few percent of magnification ignored).
 GlintRadiometry scleral_highlight_radiometry(const Eye& eye, const TearFilm& film, const Illuminator& light,
-                                             const Camera& camera, const Reflection& reflection);
+                                             const Camera& camera, const Reflection& reflection,
+                                             const Scene* lenses = nullptr);
 
 // Irradiance (W/m^2) on the iris plane of one eye from one point light,
 // through the cornea: I * T * dOmega/dA, with T the Fresnel transmittance

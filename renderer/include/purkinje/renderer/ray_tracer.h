@@ -41,6 +41,7 @@ enum class Surface : unsigned char {
   cornea_posterior,
   mesh,      // a triangle of one of the scene's meshes
   lash,      // one of an eye's eyelashes
+  spectacle_lens,  // a surface of one of the scene's spectacle lenses (front, back or edge)
 };
 const char* to_string(Surface s);
 
@@ -55,11 +56,13 @@ struct Hit {
   Surface surface = Surface::none;
   int eye = -1;             // index into scene.eyes (-1 for Surface::mesh)
   int mesh = -1;            // index into scene.meshes (Surface::mesh only)
+  int lens = -1;            // index into scene.spectacle_lenses (Surface::spectacle_lens only)
   int triangle = -1;        // index into that mesh's (or face's) triangles, or the lashes' capsules
   double t = 0;             // distance along the ray, mm
   Point3 point;             // world, recomputed in double precision
   // Outward: out of the eye; toward the front for skin and iris; for a
-  // mesh, the triangle's front, (v1 - v0) x (v2 - v0); out of a lash.
+  // mesh, the triangle's front, (v1 - v0) x (v2 - v0); out of a lash; out
+  // of a spectacle lens's glass.
   UnitVector3 normal = UnitVector3::unit_z();
   bool front_face = true;   // the ray meets the side `normal` points to
 };
@@ -109,7 +112,9 @@ class RayTracer {
   // Whether any surface (meshes included) lies on the open segment between
   // two points (both ends trimmed by 1e-6 of the length + 1e-9 mm, so a
   // segment may start or end on a surface). The cornea counts: light does
-  // not pass it without refracting. Throws std::invalid_argument for
+  // not pass it without refracting. Spectacle lenses never count: what
+  // they do to light on its way is the caller's (a light seen through one
+  // is its image, materials.h). Throws std::invalid_argument for
   // non-finite points.
   bool occluded(const Point3& from, const Point3& to) const;
   // As occluded(), ignoring the anterior and posterior cornea (for a path

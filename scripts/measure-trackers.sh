@@ -57,6 +57,9 @@ measure remote_face assets/scenes/remote_face.json "$hard" --variation-seed 6
 # lower tear menisci mirror the LEDs.
 measure headset_face_wet assets/scenes/hard/headset_face_wet.json "$hard" --variation-seed 6
 measure remote_face_wet assets/scenes/hard/remote_face_wet.json "$hard" --variation-seed 6
+# Glasses (session 33): the bundled frame with its -3 D lenses, whose
+# ghosts a glint detector may take for glints.
+measure remote_glasses assets/scenes/remote_glasses.json "$hard" --variation-seed 6
 # Glints on the pupil's edge: pupils as wide as the glints' spread (the
 # remote's two glints lie near the pupil's centre unless the eye turns).
 measure remote_glints_on_edge assets/scenes/remote.json "$hard" --min-pupil-mm 1 --max-pupil-mm 1.6 --variation-seed 4

@@ -450,7 +450,7 @@ LABEL_COLOURS = {
     "lash": ("#ff33ff", "hidden by a lash"),
     "mesh": ("#3399ff", "hidden by a mesh"),
     "eye": ("#ff3333", "hidden by the eye"),
-    "distractor": ("#00ffff", "highlight that is no glint"),  # a seen distractor, not a status
+    "distractor": ("#00ffff", "distractor (no glint)"),  # a seen distractor, not a status
 }
 
 

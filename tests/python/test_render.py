@@ -239,6 +239,24 @@ def test_a_wet_faces_tear_meniscus_highlights_are_labelled_and_imaged():
     assert all(x.kind == "sclera" for x in flat.labels.views[0].distractors)
 
 
+def test_glasses_ghosts_are_labelled_by_lens_and_imaged():
+    d = purkinje.load_scene(SOURCE_DIR / "assets/scenes/remote_glasses.json").to_dict()
+    result = purkinje.render(purkinje.parse_scene(d), noise=False)
+    ghosts = [x for x in result.labels.views[0].distractors if x.spectacle_lens is not None]
+    # Two lenses, two surfaces, two LEDs, every ghost in view.
+    assert len(ghosts) == 8
+    assert {x.kind for x in ghosts} == {"spectacle_lens_front", "spectacle_lens_back"}
+    assert {x.spectacle_lens_name for x in ghosts} == {"right_lens", "left_lens"}
+    share = float((result.aov("distractor") * result.electrons).sum())
+    assert share == pytest.approx(sum(x["electrons"] for x in result.distractors), rel=1e-4)
+    # Without the lenses, none; the glints move (the lens refracts them).
+    del d["spectacle_lenses"]
+    bare = purkinje.render(purkinje.parse_scene(d), noise=False)
+    assert not bare.labels.views[0].distractors
+    moved = [abs(a.u_px - b.u_px) for a, b in zip(result.labels.views[0].glints, bare.labels.views[0].glints)]
+    assert min(moved) > 0.05
+
+
 def test_import_leaves_open_image_io_unloaded_until_a_file_is_touched():
     import subprocess
     import sys

@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -503,7 +505,33 @@ constexpr int kBarScenes = 100;
 int random_scenes() { return testing::count_from_environment("PURKINJE_RANDOM_SCENES", kBarScenes, 1); }
 bool at_bar() { return random_scenes() == kBarScenes; }
 
-Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, bool lashes = false) {
+// A random spectacle lens in front of `eye` (its own generator: the other
+// draws stay as they were): -6 to +3 D of three materials on Vogel's base
+// curve, 10 to 16 mm from the corneal apex in primary gaze (the head faces
+// world -z), tilted up to 12 deg and shifted up to 3 mm.
+SpectacleLens random_lens(int i, const Eye& eye) {
+  std::mt19937_64 rng(9000 + i);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto draw = [&](double a, double b) { return a + (b - a) * unit(rng); };
+  SpectacleLens lens;
+  const double power = draw(-6, 3);
+  lens.refractive_index = std::array{1.498, 1.586, 1.67}[i % 3];
+  lens.center_thickness_mm = power > 0 ? 2 + 0.8 * power : 2;
+  lens.front_radius_mm = 1000 * (lens.refractive_index - 1) / (power > 0 ? power / 2 + 6 : power / 4 + 6);
+  lens.back_radius_mm =
+      back_radius_for_power_mm(power, lens.front_radius_mm, lens.center_thickness_mm, lens.refractive_index);
+  lens.outline_semi_axes_mm = {22, 17};
+  const Point3 apex = eye.cornea_center() + Vector3{0, 0, -eye.model().anterior_cornea.radius_mm};
+  const Rotation facing = Rotation::from_columns(UnitVector3::unit_x(), -UnitVector3::unit_y(), -UnitVector3::unit_z());
+  const Rotation tilt = Rotation::from_axis_angle(UnitVector3::unit_x(), draw(0, 12) * std::numbers::pi / 180);
+  const Point3 front = apex + Vector3{draw(-3, 3), draw(-3, 3), -draw(10, 16) - lens.center_thickness_mm};
+  lens.world_from_lens = Pose(facing * tilt, front.from_origin());
+  check_spectacle_lens(lens);
+  return lens;
+}
+
+Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, bool lashes = false,
+                   bool glasses = false) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const auto between = [&](double a, double b) { return a + (b - a) * unit(rng); };
   const bool remote = i % 2 == 0;
@@ -549,6 +577,7 @@ Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, boo
   }
   eye.set_appearance(look);
   scene.eyes = {eye};
+  if (glasses) scene.spectacle_lenses = {random_lens(i, eye)};
   if (crop) {
     const Camera& full = scene.cameras[0];
     Intrinsics middle = full.intrinsics();
@@ -572,11 +601,11 @@ Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, boo
   return scene;
 }
 
-GlintCheck random_scenes_glints(bool face, std::uint64_t seed) {
+GlintCheck random_scenes_glints(bool face, std::uint64_t seed, bool glasses = false) {
   std::mt19937_64 rng(seed);
   GlintCheck total;
   for (int i = 0; i < random_scenes(); ++i) {
-    const GlintCheck check = check_glints(random_scene(i, face, rng), 1);
+    const GlintCheck check = check_glints(random_scene(i, face, rng, true, false, glasses), 1);
     total.glints += check.glints;
     total.worst_px = std::max(total.worst_px, check.worst_px);
     total.worst_with_background_px = std::max(total.worst_with_background_px, check.worst_with_background_px);
@@ -604,6 +633,15 @@ TEST(RenderGlints, RandomFaceScenesCentroidsMatchLabels) {
   const GlintCheck check = random_scenes_glints(true, 20261127);
   if (at_bar()) {
     EXPECT_GT(check.glints, 120);
+  }
+  record(check);
+}
+
+// The same behind random spectacle lenses: the glints seen through them.
+TEST(RenderGlints, RandomGlassesScenesCentroidsMatchLabels) {
+  const GlintCheck check = random_scenes_glints(false, 20261129, true);
+  if (at_bar()) {
+    EXPECT_GT(check.glints, 150);
   }
   record(check);
 }
@@ -707,6 +745,32 @@ TEST(RenderPupil, SegmentationEllipseCentreMatchesLabel) {
 // has a pixel not covered by skin among the four about it, a point
 // labelled hidden one covered by skin (within a pixel: a margin can pass
 // between a point and its pixel centres).
+// 100 random scenes behind random spectacle lenses: where the labels say
+// the whole pupil is seen through the lens and the cornea (every border
+// point ok: no lid over it, no path through the lens's edge), the rendered
+// outline's centre lies within 0.1 px of the labelled one.
+TEST(RenderPupil, RandomGlassesScenesCentresMatchLabels) {
+  std::mt19937_64 rng(20261130);
+  int whole = 0;
+  double worst_px = 0;
+  for (int i = 0; i < random_scenes(); ++i) {
+    const std::optional<RenderedPupil> rendered = render_whole_pupil(random_scene(i, false, rng, false, false, true), 4);
+    if (!rendered) continue;
+    bool all_seen = true;
+    for (const PupilBorderPointTruth& b : rendered->result.truth.views[0].pupil.border) all_seen &= b.status == PathStatus::ok;
+    if (!all_seen) continue;
+    ++whole;
+    expect_centre(*rendered, i, worst_px);
+  }
+  // 69 of the 100 are seen whole (measured; the worst 0.081 px).
+  if (at_bar()) {
+    EXPECT_GT(whole, 60);
+  }
+  RecordProperty("pupils", whole);
+  RecordProperty("worst_centre_px", std::to_string(worst_px));
+  std::printf("%d pupils through glasses, worst centre %.4f px\n", whole, worst_px);
+}
+
 TEST(RenderPupil, RandomFaceScenesCentresAndOcclusionFlagsMatchTheImage) {
   std::mt19937_64 rng(20261128);
   int whole = 0, flags = 0, hidden = 0, disagreements = 0;

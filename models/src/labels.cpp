@@ -332,7 +332,7 @@ void write_pretty(const json& j, std::string& out, int indent) {
 const char* const kCsvColumns[] = {
     "camera", "camera_name", "eye",   "feature", "index",         "name",           "status",
     "u_px",   "v_px",        "x_mm",  "y_mm",    "z_mm",          "on_cap",         "incidence_deg",
-    "angle_deg", "semi_axis_1_px", "semi_axis_2_px"};
+    "angle_deg", "semi_axis_1_px", "semi_axis_2_px", "kind"};
 constexpr std::size_t kCsvColumnCount = sizeof kCsvColumns / sizeof kCsvColumns[0];
 
 std::string csv_number(double v) {
@@ -455,6 +455,7 @@ std::string truth_to_csv(const Scene& scene, const SceneTruth& truth) {
       r.set_point(d.reflection.point);
       r.set("on_cap", "0");
       r.set("incidence_deg", csv_number(d.reflection.incidence_rad * kDegreesPerRadian));
+      r.set("kind", to_string(d.kind));
       r.append_to(out);
     }
 

@@ -762,6 +762,11 @@ Scene read_scene(const std::string& text, const std::string& source_name, const 
       (v ? v->where() : o.where())
           .fail("\"" + scene.spectacle_lenses.back().name + "\"", "duplicate name (lens names must be unique)");
     }
+    try {
+      check_spectacle_lens_placement(scene, static_cast<int>(i));
+    } catch (const std::invalid_argument& e) {
+      o.where().child("position_mm").fail("", e.what());
+    }
   }
   // Meshes last: their files are read only once the rest of the scene is
   // known to be good.

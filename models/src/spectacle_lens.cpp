@@ -7,6 +7,7 @@
 #include <string>
 
 #include "purkinje/models/check.h"
+#include "purkinje/models/scene.h"
 
 namespace purkinje {
 namespace {
@@ -104,6 +105,38 @@ void check_spectacle_lens(const SpectacleLens& lens) {
     fail("the edge is " + format_number(edge) +
          " mm thick at the outline's farthest point; it must be at least 0.1 mm (a plus lens needs a larger "
          "center_thickness_mm)");
+  }
+}
+
+LensSide lens_side(const SpectacleLens& lens, const Point3& p) {
+  const double r2 = p.x * p.x + p.y * p.y;
+  const auto cap_z = [&](double radius, double vertex_z) {
+    return r2 < radius * radius ? vertex_z - r2 / (radius + std::sqrt(radius * radius - r2)) : vertex_z - radius;
+  };
+  if (p.z > cap_z(lens.front_radius_mm, 0)) return LensSide::in_front;
+  if (p.z < cap_z(lens.back_radius_mm, -lens.center_thickness_mm)) return LensSide::behind;
+  return LensSide::between;
+}
+
+void check_spectacle_lens_placement(const Scene& scene, int index) {
+  const SpectacleLens& lens = scene.spectacle_lenses.at(index);
+  const Pose lens_from_world = lens.world_from_lens.inverse();
+  const auto in_glass = [&](const Point3& world) {
+    const Point3 p = lens_from_world * world;
+    return lens_side(lens, p) == LensSide::between && inside_outline(lens, p);
+  };
+  for (std::size_t e = 0; e < scene.eyes.size(); ++e) {
+    if (in_glass(scene.eyes[e].corneal_apex())) {
+      throw std::invalid_argument("it cuts eyes[" + std::to_string(e) + "]'s cornea (the corneal apex lies in its glass)");
+    }
+  }
+  for (std::size_t c = 0; c < scene.cameras.size(); ++c) {
+    if (in_glass(scene.cameras[c].center())) {
+      throw std::invalid_argument("camera \"" + scene.cameras[c].name() + "\" lies in the lens's glass");
+    }
+  }
+  for (const Illuminator& l : scene.illuminators) {
+    if (in_glass(l.position)) throw std::invalid_argument("illuminator \"" + l.name + "\" lies in the lens's glass");
   }
 }
 

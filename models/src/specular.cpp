@@ -540,20 +540,40 @@ namespace {
 // solver's conicoids with their apices on the lens axis, curving away
 // from +z as the cornea's do from the eye's +z.
 struct LensFrame {
+  const SpectacleLens* lens_ref;
   Pose lens_from_world;
   Surface front, back;
   double n = 1;
 
   explicit LensFrame(const SpectacleLens& lens)
-      : lens_from_world(lens.world_from_lens.inverse()),
+      : lens_ref(&lens),
+        lens_from_world(lens.world_from_lens.inverse()),
         front{0.0, Conicoid{lens.front_radius_mm, 0.0}},
         back{-lens.center_thickness_mm, Conicoid{lens.back_radius_mm, 0.0}},
         n(lens.refractive_index) {}
   Vector3 local(const Point3& world) const { return (lens_from_world * world).from_origin(); }
-  // In front of the lens: outside both spheres; behind it: inside both.
-  bool in_front(const Vector3& p) const { return front.implicit(p) > 0 && back.implicit(p) > 0; }
-  bool behind(const Vector3& p) const { return front.implicit(p) < 0 && back.implicit(p) < 0; }
+  bool in_front(const Vector3& p) const { return lens_side(*lens_ref, Point3::origin() + p) == LensSide::in_front; }
+  bool behind(const Vector3& p) const { return lens_side(*lens_ref, Point3::origin() + p) == LensSide::behind; }
 };
+
+// Where the segment from a to b first crosses the cap of `s` (a sphere:
+// the half toward its apex), if it does.
+bool cap_crossing(const Surface& s, const Vector3& a, const Vector3& b, Vector3& hit) {
+  const Vector3 c{0, 0, s.apex_z - s.radius()};
+  const Vector3 d = b - a, m = a - c;
+  const double A = d.squared_norm(), B = dot(m, d), C = m.squared_norm() - s.radius() * s.radius();
+  const double disc = B * B - A * C;
+  if (!(A > 0) || disc < 0) return false;
+  for (const double t : {(-B - std::sqrt(disc)) / A, (-B + std::sqrt(disc)) / A}) {
+    if (!(t >= 0 && t <= 1)) continue;
+    const Vector3 p = a + d * t;
+    if (p.z > c.z) {
+      hit = p;
+      return true;
+    }
+  }
+  return false;
+}
 
 Point3 lens_world(const SpectacleLens& lens, const Vector3& p) {
   return lens.world_from_lens * (Point3::origin() + p);
@@ -583,11 +603,16 @@ LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from_w, 
   const Vector3& inner = from_in_front ? to : from;
   // Start where the straight segment crosses the surfaces.
   Vector3 h1, h2;
-  if (!segment_hits(f.front, outer, inner, h1) || !segment_hits(f.back, outer, inner, h2)) return out;
+  if (!cap_crossing(f.front, outer, inner, h1) || !cap_crossing(f.back, outer, inner, h2)) return out;
   const std::array<double, 2> c1 = chart_start(f.front, h1), c2 = chart_start(f.back, h2);
   std::array<double, 4> xy{c1[0], c1[1], c2[0], c2[1]};
   if (!solve_chain<2>({f.front, f.back}, outer, inner, {1.0, f.n, 1.0}, xy, out.iterations)) {
-    out.status = PathStatus::not_converged;
+    // The spheres go on past the outline, and the solver can leave it
+    // toward a path that only they have: then there is none through the
+    // lens. Not converged within it is the solver's failure.
+    Vector3 x1, x2;
+    const bool inside = lens_chart_point(lens, f.front, xy[0], xy[1], x1) && lens_chart_point(lens, f.back, xy[2], xy[3], x2);
+    out.status = inside ? PathStatus::not_converged : PathStatus::no_solution;
     return out;
   }
   Vector3 x1, x2;
@@ -681,7 +706,7 @@ LensReflection solve_lens_reflection(const SpectacleLens& lens, LensSurface surf
   const Reflection guess = solve_sphere_reflection(back_centre, lens.back_radius_mm, source_w, target_w);
   const Vector3 q0 = guess.status == PathStatus::ok ? f.local(guess.point) : Vector3{0, 0, -lens.center_thickness_mm};
   Vector3 h1, h3;
-  if (!segment_hits(f.front, target, q0, h1) || !segment_hits(f.front, source, q0, h3)) return out;
+  if (!cap_crossing(f.front, target, q0, h1) || !cap_crossing(f.front, source, q0, h3)) return out;
   const std::array<double, 2> c1 = chart_start(f.front, h1), cq = chart_start(f.back, q0),
                               c3 = chart_start(f.front, h3);
   std::array<double, 6> xy{c1[0], c1[1], cq[0], cq[1], c3[0], c3[1]};

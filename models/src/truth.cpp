@@ -79,15 +79,10 @@ Path through_lenses(const Scene& scene, const Point3* light, const Point3& camer
     }
     if (straight()) {
       if (i == 0) return path;  // no lens in the way
-      // The iteration left the lens (its edge lies between the eye's
-      // point and an end): the straight path, if it misses the lens.
-      path = solve(light_end, camera);
-      if (!path_exists(path.status)) return path;
-      if (const PathStatus s = legs_from(path); s != PathStatus::ok) {
-        path.status = s;
-      } else if (!straight()) {
-        path.status = PathStatus::no_solution;
-      }
+      // The iteration left the lens: the straight path (iteration 0's)
+      // crosses it and the refracted one misses it, so none exists here
+      // (an end seen past the lens's edge).
+      path.status = PathStatus::no_solution;
       return path;
     }
     const Point3 point = point_of(path);

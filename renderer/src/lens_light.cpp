@@ -1,5 +1,7 @@
 #include "lens_light.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -12,12 +14,16 @@ namespace {
 
 // The grid's spacing on the plane behind the lens: at 2.5 mm the
 // interpolated irradiance stays within 0.1% of the exact one for -6 to
-// +2 D lenses (spectacle_lens_light_test).
+// +2 D lenses (SeenLightsThroughALens).
 constexpr double kNodeSpacingMm = 2.5;
 // Beyond the outline, so that points behind the lens's rim interpolate.
 constexpr double kGridMarginMm = 3;
 // A collimated beam's light comes from this far.
 constexpr double kFarMm = 1e6;
+// At a plus lens's focus the beam's width goes to 0 and its irradiance
+// without bound (an LED's size and the lens's aberrations keep it finite):
+// capped at 1e4 times the node's, 1% of the width.
+constexpr double kMinSpread = 1e-2;
 
 // Where the eye behind the lens is, or 12 mm behind its back vertex.
 Point3 region_of(const Scene& scene, int lens_index) {
@@ -68,12 +74,13 @@ SeenLights::Field::Field(const SpectacleLens& spectacle, const Point3& light_pos
   const double s = centre.valid && centre.vergence != 0 ? std::clamp(1 / centre.vergence, -kFarMm, kFarMm) : kFarMm;
   central_image_local = near_local + d * s;
   nodes.resize(static_cast<std::size_t>(nx) * ny);
-  for (int j = 0; j < ny; ++j) {
+  // Five solved passages a node, some 400 nodes: in parallel.
+  tbb::parallel_for(0, ny, [&](int j) {
     for (int i = 0; i < nx; ++i) {
       const Point3 local{-half_x + i * step_x, -half_y + j * step_y, plane_z};
       nodes[static_cast<std::size_t>(j) * nx + i] = node_at(lens.world_from_local() * local);
     }
-  }
+  });
 }
 
 bool SeenLights::Field::crosses(const Point3& p) const {
@@ -86,7 +93,7 @@ bool SeenLights::Field::crosses(const Point3& p) const {
   return front.first_hit(s, t) || back.first_hit(s, t);
 }
 
-SeenLights::Field::Node SeenLights::Field::at(const Point3& p, double& depth_mm) const {
+SeenLights::Field::Node SeenLights::Field::at(const Point3& p, double& depth_mm, Point3& on_plane) const {
   const Point3 q = lens.to_local(p);
   // The ray through p, to first order the line from it to the apex's
   // image, crosses the plane at (x, y); p lies `depth` behind.
@@ -110,23 +117,15 @@ SeenLights::Field::Node SeenLights::Field::at(const Point3& p, double& depth_mm)
     out.irradiance += node.irradiance * w;
     weights += w;
   }
+  on_plane = lens.world_from_local() * Point3{x, y, plane_z};
   // Beyond the lens's rim every node's passage may fail: the apex's.
   if (!(weights > 0)) return centre;
   const auto unit = UnitVector3::try_normalize(out.direction);
   if (!unit) return centre;
   out.valid = true;
+  out.direction = unit->vector();
   out.vergence /= weights;
   out.irradiance /= weights;
-  // From p toward the image seen at (x, y): p need not lie exactly on the
-  // ray through (x, y), and this corrects its direction to first order.
-  out.direction = unit->vector();
-  if (std::abs(out.vergence) > 1 / kFarMm) {
-    const Point3 on_plane = lens.world_from_local() * Point3{x, y, plane_z};
-    const Point3 image = on_plane + out.direction / out.vergence;
-    if (const auto toward = UnitVector3::try_normalize((image - p) * (out.vergence > 0 ? 1.0 : -1.0))) {
-      out.direction = toward->vector();
-    }
-  }
   return out;
 }
 
@@ -144,15 +143,28 @@ Light SeenLights::through_lens(const Point3& p, std::size_t k) const {
     const Field& field = fields_[f];
     if (!field.crosses(p)) continue;
     double depth = 0;
-    const Field::Node node = field.at(p, depth);
+    Point3 on_plane;
+    const Field::Node node = field.at(p, depth, on_plane);
     if (!node.valid) return light;
-    // Carried along the ray: the beam's width grows as 1 + vergence depth.
-    const double spread = std::max(1 + node.vergence * depth, 1e-6);
+    // Carried along the ray: the beam's width grows as 1 + vergence depth
+    // (signed: past a plus lens's focus it grows again, turned over).
+    const double signed_spread = 1 + node.vergence * depth;
+    const double spread = std::max(std::abs(signed_spread), kMinSpread);
     const double irradiance = node.irradiance / (spread * spread);
-    const double v = node.vergence / spread;  // at p
-    const double far = v == 0 ? kFarMm : std::min(std::abs(1 / v), kFarMm);
+    const double v = node.vergence / signed_spread;  // at p; past a focus, diverging from it
+    const double far = v == 0 || !std::isfinite(v) ? kFarMm : std::min(std::abs(1 / v), kFarMm);
+    // From p toward the image seen at the plane's point (p need not lie
+    // exactly on the ray through it: this corrects its direction to first
+    // order); the light comes from the lens's side whether the image is
+    // virtual, a real focus ahead of p or one p has passed.
+    Vector3 direction = node.direction;
+    if (std::abs(node.vergence) > 1 / kFarMm) {
+      const Point3 image = on_plane + node.direction / node.vergence;
+      const double toward_image = (node.vergence > 0) == (signed_spread > 0) ? 1.0 : -1.0;
+      if (const auto d = UnitVector3::try_normalize((image - p) * toward_image)) direction = d->vector();
+    }
     Light seen = light;
-    seen.position = p + node.direction * far;
+    seen.position = p + direction * far;
     seen.intensity_w_sr = light.intensity_w_sr * irradiance * far * far;
     seen.emitter_radius_mm = light.emitter_radius_mm * far / distance(light.position, p);
     return seen;

@@ -34,7 +34,10 @@ double lens_transmittance(const LensPassage& passage, double n);
 
 class SeenLights {
  public:
+  // Keeps a pointer to `lights`, which must outlive it.
   SeenLights(const Scene& scene, const std::vector<Light>& lights);
+  SeenLights(const SeenLights&) = delete;
+  SeenLights& operator=(const SeenLights&) = delete;
 
   // Light k as `p` sees it: the light, or, where the straight segment
   // from `p` to it crosses a spectacle lens (the first listed, as the
@@ -79,9 +82,9 @@ struct SeenLights::Field {
   Field(const SpectacleLens& lens, const Point3& light, const Point3& near, double spacing_mm);
   // Whether the straight segment from `p` to the light crosses the lens.
   bool crosses(const Point3& p) const;
-  // The node values for `p` (behind the lens) and how far behind the
-  // plane along its ray it lies.
-  Node at(const Point3& p, double& depth_mm) const;
+  // The node values for `p` (behind the lens), how far behind the plane
+  // along its ray it lies, and where that ray crosses the plane.
+  Node at(const Point3& p, double& depth_mm, Point3& on_plane) const;
 };
 
 }  // namespace purkinje::renderer

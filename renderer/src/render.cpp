@@ -800,15 +800,21 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     // status stay the mid-exposure instant's).
     for (std::size_t i = 0; i < result.glints.size(); ++i) result.glints[i].electrons = glint_electrons[i];
     // Each view's distractors: the mid-exposure instant's, and as at the
-    // nearest instant those it has not; by kind, light, and along the lid
-    // (head-frame x), as each instant's.
+    // nearest instant those it has not; in each instant's order: the
+    // sclera's by light, the lenses' ghosts by lens, surface and light,
+    // the menisci's by light and along the lid (head-frame x).
     const auto along_lid = [&](const HighlightTrack& t) {
       if (t.kind != DistractorKind::tear_meniscus) return 0.0;
       return (head_placement(scene, t.eye).world_from_head.inverse() * t.nearest.truth.reflection.point).x;
     };
-    std::vector<std::tuple<int, DistractorKind, int, double, std::size_t>> order;
+    const auto rank = [](DistractorKind kind) {
+      return kind == DistractorKind::sclera ? 0 : kind == DistractorKind::tear_meniscus ? 2 : 1;
+    };
+    std::vector<std::tuple<int, int, int, DistractorKind, int, double, std::size_t>> order;
     for (std::size_t t = 0; t < tracks.size(); ++t) {
-      order.emplace_back(tracks[t].eye, tracks[t].kind, tracks[t].illuminator, along_lid(tracks[t]), t);
+      const HighlightTrack& track = tracks[t];
+      order.emplace_back(track.eye, rank(track.kind), track.nearest.truth.spectacle_lens, track.kind,
+                         track.illuminator, along_lid(track), t);
     }
     std::sort(order.begin(), order.end());
     std::vector<GlintImage> images;
@@ -816,7 +822,7 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
       if (view.camera != camera_index) continue;
       view.distractors.clear();
       for (const auto& entry : order) {
-        const HighlightTrack& track = tracks[std::get<4>(entry)];
+        const HighlightTrack& track = tracks[std::get<6>(entry)];
         if (track.eye != view.eye) continue;
         view.distractors.push_back(track.nearest.truth);
         GlintImage image = track.nearest.image;

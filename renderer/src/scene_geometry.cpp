@@ -362,9 +362,11 @@ namespace {
 
 // A spectacle lens: its front, back and edge in the lens frame, placed with
 // their lens's index where other surfaces hold their eye's.
-void add_spectacle_lens(SurfaceList& surfaces, int index, const SpectacleLens& lens) {
+void add_spectacle_lens(SurfaceList& surfaces, int index, const Scene& scene) {
+  const SpectacleLens& lens = scene.spectacle_lenses[index];
   try {
     check_spectacle_lens(lens);
+    check_spectacle_lens_placement(scene, index);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("RayTracer: spectacle_lenses[" + std::to_string(index) + "] (\"" + lens.name +
                                 "\"): " + e.what());
@@ -390,7 +392,7 @@ SceneGeometry build_scene_geometry(const Scene& scene) {
     if (scene.eyes[i].appearance().eyelids) add_lids(geometry, index, scene, eyeball_begin);
   }
   for (std::size_t i = 0; i < scene.spectacle_lenses.size(); ++i) {
-    add_spectacle_lens(geometry.surfaces, static_cast<int>(i), scene.spectacle_lenses[i]);
+    add_spectacle_lens(geometry.surfaces, static_cast<int>(i), scene);
   }
   for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
     check_mesh(static_cast<int>(i), scene.meshes[i]);

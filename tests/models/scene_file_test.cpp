@@ -1068,7 +1068,14 @@ TEST(SceneFile, RejectsBadSpectacleLensesByKeyAndRule) {
   const std::pair<std::string, std::string> cases[] = {
       {place + R"("power_d": 8, "base_curve_d": 4)", "spectacle_lenses[0].power_d = 8: a back vertex power of 8 D"},
       {place + R"("power_d": -30)", "spectacle_lenses[0].power_d = -30"},
-      {place + R"("power_d": -3, "front_radius_mm": 100)", "spectacle_lenses[0]"},
+      {place + R"("power_d": -3, "front_radius_mm": 100)", "give exactly one of power_d and front_radius_mm"},
+      // Cutting the cornea (its apex at z = 592.2).
+      {R"("position_mm": [0, 0, 591], "rotation_vector_deg": [180, 0, 0], "power_d": -3)",
+       "spectacle_lenses[0].position_mm: it cuts eyes[0]'s cornea"},
+      // The camera in the glass of a lens turned to world +x (the eye is
+      // beside its outline).
+      {R"("position_mm": [1, 0, 0], "rotation_vector_deg": [0, 90, 0], "power_d": -3)",
+       "camera \"cam0\" lies in the lens's glass"},
       {place + R"("front_radius_mm": 100, "back_radius_mm": 80)", "center_thickness_mm"},
       {place + R"("power_d": 4, "center_thickness_mm": 0.5)", "edge"},
       {R"("position_mm": [0, 0, 578], "power_d": -3)", "rotation_vector_deg"},

@@ -577,7 +577,15 @@ Scene random_scene(int i, bool face, std::mt19937_64& rng, bool crop = true, boo
   }
   eye.set_appearance(look);
   scene.eyes = {eye};
-  if (glasses) scene.spectacle_lenses = {random_lens(i, eye)};
+  if (glasses) {
+    scene.spectacle_lenses = {random_lens(i, eye)};
+    // A near headset eye can bring the lens onto its LEDs: no glasses then.
+    try {
+      check_spectacle_lens_placement(scene, 0);
+    } catch (const std::invalid_argument&) {
+      scene.spectacle_lenses.clear();
+    }
+  }
   if (crop) {
     const Camera& full = scene.cameras[0];
     Intrinsics middle = full.intrinsics();
@@ -754,7 +762,12 @@ TEST(RenderPupil, RandomGlassesScenesCentresMatchLabels) {
   int whole = 0;
   double worst_px = 0;
   for (int i = 0; i < random_scenes(); ++i) {
-    const std::optional<RenderedPupil> rendered = render_whole_pupil(random_scene(i, false, rng, false, false, true), 4);
+    // The outline is geometry: no lights (the lenses' light fields and the
+    // iris's caches were most of such a render's cost), 8 rays a pixel (at
+    // 4 the worst centre was 0.094 px without lights, 0.081 with).
+    Scene scene = random_scene(i, false, rng, false, false, true);
+    scene.illuminators.clear();
+    const std::optional<RenderedPupil> rendered = render_whole_pupil(scene, 8);
     if (!rendered) continue;
     bool all_seen = true;
     for (const PupilBorderPointTruth& b : rendered->result.truth.views[0].pupil.border) all_seen &= b.status == PathStatus::ok;
@@ -762,7 +775,7 @@ TEST(RenderPupil, RandomGlassesScenesCentresMatchLabels) {
     ++whole;
     expect_centre(*rendered, i, worst_px);
   }
-  // 69 of the 100 are seen whole (measured; the worst 0.081 px).
+  // 70 of the 100 are seen whole (measured; the worst 0.080 px).
   if (at_bar()) {
     EXPECT_GT(whole, 60);
   }

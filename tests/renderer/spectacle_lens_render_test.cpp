@@ -225,12 +225,17 @@ TEST(GlintThroughGlasses, ItsPowerIsTheShareOfTheLightsRaysThatEnterTheAperture)
 }
 
 TEST(GhostsOfGlasses, TheirPowerIsTheShareOfTheLightsRaysThatEnterTheAperture) {
-  const Scene scene = glasses();
+  Scene scene = glasses();
+  // A third LED far to the side: 12 deg of incidence on the front (from
+  // 400 mm aside its front ghost would lie beyond the outline).
+  Illuminator far = scene.illuminators[0];
+  far.position = {250, 0, 0};
+  scene.illuminators.push_back(far);
   const Camera& camera = scene.cameras[0];
   const SpectacleLens& lens = scene.spectacle_lenses[0];
   const double n = lens.refractive_index;
   for (const LensSurface surface : {LensSurface::front, LensSurface::back}) {
-    for (int l = 0; l < 2; ++l) {
+    for (int l = 0; l < 3; ++l) {
       const Illuminator& light = scene.illuminators[l];
       const LensReflection g = solve_lens_reflection(lens, surface, light.position, camera.center());
       ASSERT_EQ(g.status, PathStatus::ok);
@@ -239,7 +244,7 @@ TEST(GhostsOfGlasses, TheirPowerIsTheShareOfTheLightsRaysThatEnterTheAperture) {
       const auto path = [&](const Ray3& from_light, double& w) -> std::optional<Ray3> {
         if (surface == LensSurface::front) return reflect_at(from_light, front_centre(lens), lens.front_radius_mm, 1, n, w);
         auto in = refract_at(from_light, front_centre(lens), lens.front_radius_mm, 1, n, w);
-        if (in) in = reflect_at(*in, back_centre(lens), lens.back_radius_mm, 1, n, w);  // inside: glass to air
+        if (in) in = reflect_at(*in, back_centre(lens), lens.back_radius_mm, n, 1, w);  // the glass outside the sphere
         if (in) in = refract_at(*in, front_centre(lens), lens.front_radius_mm, n, 1, w);
         return in;
       };
@@ -248,6 +253,39 @@ TEST(GhostsOfGlasses, TheirPowerIsTheShareOfTheLightsRaysThatEnterTheAperture) {
       EXPECT_NEAR(r.power_w / brute, 1, 3e-3) << to_string(surface) << " " << l;
     }
   }
+}
+
+TEST(SeenLightsThroughALens, PastAPlusLensFocusTheLightStaysFiniteAndFallsOff) {
+  // A +20 D lens focuses an LED 600 mm away about 55 mm behind itself:
+  // points on the axis from 30 to 120 mm behind it see a finite light,
+  // brightest about the focus, from the lens's side.
+  Scene scene = glasses();
+  SpectacleLens& lens = scene.spectacle_lenses[0];
+  lens.front_radius_mm = 1000 * (lens.refractive_index - 1) / 20;
+  lens.outline_semi_axes_mm = {15, 12};
+  lens.center_thickness_mm = 8;
+  lens.back_radius_mm = back_radius_for_power_mm(20, lens.front_radius_mm, 8, lens.refractive_index);
+  check_spectacle_lens(lens);
+  const std::vector<Light> lights{{Point3{0, 0, 0}, 0.3, 1, 0}};
+  const SeenLights seen(scene, lights);
+  const Point3 back = lens.world_from_lens * Point3{0, 0, -lens.center_thickness_mm};
+  double brightest = 0, at_brightest = 0, last = 0;
+  for (double d = 30; d <= 120; d += 2) {
+    const Point3 p = back + Vector3{0, 0, d};
+    const Light l = seen.at(p, 0);
+    const double e = l.intensity_w_sr / (l.position - p).squared_norm();
+    ASSERT_TRUE(std::isfinite(e) && e > 0) << d;
+    EXPECT_LT((l.position - p).z, 0) << d;  // toward the lens (world -z)
+    if (e > brightest) {
+      brightest = e;
+      at_brightest = d;
+    }
+    last = e;
+  }
+  EXPECT_GT(at_brightest, 40);
+  EXPECT_LT(at_brightest, 70);
+  EXPECT_LT(last, brightest / 4);
+  EXPECT_LT(brightest, 1e4 * 0.3 / (600.0 * 600.0) * 1e3);  // capped, not 1e12 times
 }
 
 // Dark glasses scene: every albedo 0, so that only glints and ghosts light it.

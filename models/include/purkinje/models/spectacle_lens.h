@@ -15,6 +15,8 @@
 
 namespace purkinje {
 
+struct Scene;
+
 struct SpectacleLens {
   std::string name;
   // Lens frame: origin at the front surface's vertex (the optical centre),
@@ -57,6 +59,19 @@ double lens_thickness_mm(const SpectacleLens& lens, double x_mm, double y_mm);
 // (1, 3], semi-axes in (0, 60] mm and smaller than either radius, and an
 // edge at least 0.1 mm thick all round the outline.
 void check_spectacle_lens(const SpectacleLens& lens);
+
+// Throws std::invalid_argument naming the rule when scene.spectacle_lenses
+// [index] is placed where its optics do not hold: no eye's cornea (its
+// apex) and no camera or illuminator may lie in its glass. Overlapping
+// lenses are not checked.
+void check_spectacle_lens_placement(const Scene& scene, int index);
+
+// Which side of the lens a lens-frame point lies on: in front of its
+// front surface (higher z than the front cap there; beyond the cap's
+// reach, than its centre plane), behind its back surface (likewise), or
+// between them (in the glass when inside the outline).
+enum class LensSide { in_front, between, behind };
+LensSide lens_side(const SpectacleLens& lens, const Point3& lens_point);
 
 // Whether a lens-frame point lies within the outline's cylinder.
 bool inside_outline(const SpectacleLens& lens, const Point3& lens_point);

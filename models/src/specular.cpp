@@ -589,7 +589,13 @@ bool lens_chart_point(const SpectacleLens& lens, const Surface& s, double x, dou
 
 }  // namespace
 
-LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from_w, const Point3& to_w) {
+namespace {
+
+// solve_lens_passage, started from `start` (chart coordinates on the
+// front and back surfaces) when given instead of the straight segment's
+// crossings: a neighbour of a solved passage converges in fewer steps.
+LensPassage passage(const SpectacleLens& lens, const Point3& from_w, const Point3& to_w,
+                    const std::array<double, 4>* start) {
   LensPassage out;
   const LensFrame f(lens);
   const Vector3 from = f.local(from_w), to = f.local(to_w);
@@ -602,10 +608,15 @@ LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from_w, 
   const Vector3& outer = from_in_front ? from : to;
   const Vector3& inner = from_in_front ? to : from;
   // Start where the straight segment crosses the surfaces.
-  Vector3 h1, h2;
-  if (!cap_crossing(f.front, outer, inner, h1) || !cap_crossing(f.back, outer, inner, h2)) return out;
-  const std::array<double, 2> c1 = chart_start(f.front, h1), c2 = chart_start(f.back, h2);
-  std::array<double, 4> xy{c1[0], c1[1], c2[0], c2[1]};
+  std::array<double, 4> xy{};
+  if (start) {
+    xy = *start;
+  } else {
+    Vector3 h1, h2;
+    if (!cap_crossing(f.front, outer, inner, h1) || !cap_crossing(f.back, outer, inner, h2)) return out;
+    const std::array<double, 2> c1 = chart_start(f.front, h1), c2 = chart_start(f.back, h2);
+    xy = {c1[0], c1[1], c2[0], c2[1]};
+  }
   if (!solve_chain<2>({f.front, f.back}, outer, inner, {1.0, f.n, 1.0}, xy, out.iterations)) {
     // The spheres go on past the outline, and the solver can leave it
     // toward a path that only they have: then there is none through the
@@ -640,11 +651,22 @@ LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from_w, 
   return out;
 }
 
+}  // namespace
+
+LensPassage solve_lens_passage(const SpectacleLens& lens, const Point3& from, const Point3& to) {
+  return passage(lens, from, to, nullptr);
+}
+
 LightThroughLens light_through_lens(const SpectacleLens& lens, const Point3& light, const Point3& near) {
   LightThroughLens out;
   out.passage = solve_lens_passage(lens, near, light);
   out.status = out.passage.status;
   if (out.status != PathStatus::ok) return out;
+  // The neighbours start from this passage: light on the front side, so
+  // its second point is on the front surface, its first on the back.
+  const Pose lens_from_world = lens.world_from_lens.inverse();
+  const Point3 on_front = lens_from_world * out.passage.second, on_back = lens_from_world * out.passage.first;
+  const std::array<double, 4> start{on_front.x, on_front.y, on_back.x, on_back.y};
   const UnitVector3 d0 = out.passage.leaving;
   const UnitVector3 e1 = UnitVector3::normalize(cross(d0, std::abs(d0.x()) < 0.9 ? Vector3{1, 0, 0} : Vector3{0, 1, 0}));
   const UnitVector3 e2 = UnitVector3::normalize(cross(d0, e1));
@@ -654,8 +676,8 @@ LightThroughLens light_through_lens(const SpectacleLens& lens, const Point3& lig
   Vector3 leaving_rate[2], arriving_rate[2];
   for (int axis = 0; axis < 2; ++axis) {
     const UnitVector3& e = axis == 0 ? e1 : e2;
-    const LensPassage plus = solve_lens_passage(lens, near + e * h, light);
-    const LensPassage minus = solve_lens_passage(lens, near - e * h, light);
+    const LensPassage plus = passage(lens, near + e * h, light, &start);
+    const LensPassage minus = passage(lens, near - e * h, light, &start);
     if (plus.status != PathStatus::ok || minus.status != PathStatus::ok) {
       out.status = plus.status != PathStatus::ok ? plus.status : minus.status;
       return out;

@@ -266,15 +266,17 @@ double vogel_base_curve_d(double power_d) { return power_d > 0 ? power_d / 2 + 6
 // The centre thickness that leaves a plus lens's edge 1 mm thick at the
 // outline's farthest point (at least 2 mm, a minus lens's usual centre).
 double default_center_thickness_mm(double power_d, double front_radius_mm, double n, double reach_mm) {
-  double t = 2;
-  if (!(power_d > 0)) return t;
-  const auto sag = [](double r, double h) { return h * h / (r + std::sqrt(std::max(0.0, r * r - h * h))); };
+  SpectacleLens lens;
+  lens.center_thickness_mm = 2;
+  if (!(power_d > 0)) return lens.center_thickness_mm;
+  lens.front_radius_mm = front_radius_mm;
+  lens.refractive_index = n;
   for (int i = 0; i < 30; ++i) {
-    const double back = back_radius_for_power_mm(power_d, front_radius_mm, t, n);
-    const double edge = t + sag(back, reach_mm) - sag(front_radius_mm, reach_mm);
-    t = std::max(2.0, t + 1.0 - edge);
+    lens.back_radius_mm = back_radius_for_power_mm(power_d, front_radius_mm, lens.center_thickness_mm, n);
+    const double edge = lens_thickness_mm(lens, reach_mm, 0);
+    lens.center_thickness_mm = std::max(2.0, lens.center_thickness_mm + 1.0 - edge);
   }
-  return t;
+  return lens.center_thickness_mm;
 }
 
 // A glasses lens, placed as a mesh is: position_mm its front vertex (the

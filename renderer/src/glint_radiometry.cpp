@@ -90,19 +90,21 @@ GlintRadiometry mirror_radiometry(const Mirror& mirror, double reflectance, cons
   // Each of the mirror's reflections as the camera sees it through the
   // lenses: what the differences below need of a reflection is where the
   // camera sees it and the direction in which its light leaves the LED.
-  const auto seen = [&](const Point3& source, const Point3& target) {
-    const SeenHighlight h = see_highlight(*lenses, source, target, mirror);
+  const auto as_seen = [](const SeenHighlight& h) {
     Reflection r = h.reflection;
     r.point = h.seen_at();
     r.incident = h.from_light();
     return r;
+  };
+  const auto seen = [&](const Point3& source, const Point3& target) {
+    return as_seen(see_highlight(*lenses, source, target, mirror));
   };
   const SeenHighlight central = see_highlight(*lenses, light.position, camera.center(), mirror);
   if (central.reflection.status != PathStatus::ok ||
       distance(central.reflection.point, reflection.point) > 1e-9) {
     return failed(PathStatus::not_converged);  // not this highlight's path
   }
-  GlintRadiometry out = straight_radiometry(seen, reflectance, light, camera, seen(light.position, camera.center()));
+  GlintRadiometry out = straight_radiometry(seen, reflectance, light, camera, as_seen(central));
   for (const Leg* leg : {&central.to_camera, &central.to_light}) {
     if (leg->passage) out.power_w *= lens_transmittance(*leg->passage, lenses->spectacle_lenses[leg->lens].refractive_index);
   }

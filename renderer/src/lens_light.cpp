@@ -47,7 +47,8 @@ SeenLights::Field::Field(const SpectacleLens& spectacle, const Point3& light_pos
       front{spectacle.front_radius_mm, 0.0, spectacle.outline_semi_axes_mm[0], spectacle.outline_semi_axes_mm[1], 1.0},
       back{spectacle.back_radius_mm, -spectacle.center_thickness_mm, spectacle.outline_semi_axes_mm[0],
            spectacle.outline_semi_axes_mm[1], -1.0},
-      light(light_position) {
+      light(light_position),
+      light_local(lens.to_local(light_position)) {
   plane_z = lens.to_local(near).z;
   half_x = spectacle.outline_semi_axes_mm[0] + kGridMarginMm;
   half_y = spectacle.outline_semi_axes_mm[1] + kGridMarginMm;
@@ -84,8 +85,8 @@ SeenLights::Field::Field(const SpectacleLens& spectacle, const Point3& light_pos
 }
 
 bool SeenLights::Field::crosses(const Point3& p) const {
-  const Point3 q = lens.to_local(p), l = lens.to_local(light);
-  const Vector3 d = l - q;
+  const Point3 q = lens.to_local(p);
+  const Vector3 d = light_local - q;
   const double length = d.norm();
   if (!(length > 0)) return false;
   const surfaces::Segment s{q, d / length, 0.0, length};

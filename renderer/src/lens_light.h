@@ -66,6 +66,7 @@ struct SeenLights::Field {
   Frame lens;                        // the lens frame
   surfaces::LensCap front, back;     // in it
   Point3 light;                      // world
+  Point3 light_local;                // lens frame
   double plane_z = 0;                // lens frame: the grid's plane
   double half_x = 0, half_y = 0, step_x = 1, step_y = 1;
   int nx = 0, ny = 0;

@@ -53,7 +53,7 @@ def with_face(d, lashes=None, face=None, lids=None, gaze=None):
 # eye's pupil or None for the whole image)
 def entries():
     bundled = [
-        ("remote_face", "remote_face (bundled): both eyes, face, lids, lashes", load("remote_face"), None),
+        ("remote_face", "remote_face (bundled): both eyes, face, lids, lashes, brows", load("remote_face"), None),
         ("remote", "remote (bundled): lid sphere in a wall", load("remote"), 60),
         ("headset", "headset (bundled): lid sphere", load("headset"), None),
         ("remote_glasses", "remote_glasses (bundled): glasses, -3 D lenses in a frame; the eye seen through a lens, "

@@ -74,11 +74,12 @@ const std::vector<ParameterRule>& scene_rules() {
     }
     return face;
   };
-  const auto lash_rules = [] {
-    std::vector<ParameterRule> lashes;
-    for (const LashKey& key : kLashKeys) lashes.push_back({"lash_" + std::string(key.name), T::real, key.low, key.high});
-    lashes.push_back({"lash_seed", T::integer, 0, kMaxExactInteger});
-    return lashes;
+  // A face's lashes ("lash_...") or brows ("brows_...": "brow_" begins a face key).
+  const auto hair_rules = [](const std::string& prefix, const auto& keys) {
+    std::vector<ParameterRule> hairs;
+    for (const auto& key : keys) hairs.push_back({prefix + std::string(key.name), T::real, key.low, key.high});
+    hairs.push_back({prefix + "seed", T::integer, 0, kMaxExactInteger});
+    return hairs;
   };
   static const std::vector<ParameterRule> rules = concatenated({std::vector<ParameterRule>{
       {"gaze_turn_deg", T::real, 0, 90},
@@ -96,7 +97,7 @@ const std::vector<ParameterRule>& scene_rules() {
       {"gaze_speed_direction_deg", T::real, -360, 360},
       {"lid_opening", T::real, 0, 1},
       {"blink", T::boolean}},
-      face_rules(), lash_rules(), std::vector<ParameterRule>{
+      face_rules(), hair_rules("lash_", kLashKeys), hair_rules("brows_", kBrowKeys), std::vector<ParameterRule>{
       {"iris_seed", T::integer, 0, kMaxExactInteger},
       {"iris_texture_contrast", T::real, 0, 1},
       {"iris_albedo", T::real, 0, 1},
@@ -490,9 +491,13 @@ struct Reader {
       if (given(name.c_str()) && !face) where.at(name).fail("", "the scene's first eye has no face (scene-format.md: face)");
     }
     const bool lashes = face && scene.eyes.front().appearance().face->lashes.has_value();
+    const bool brows = face && scene.eyes.front().appearance().face->brows.has_value();
     for (const ParameterRule& rule : scene_rules()) {
       if (rule.name.starts_with("lash_") && given(rule.name.c_str()) && !lashes) {
         where.at(rule.name).fail("", "the scene's first eye has no lashes (scene-format.md: lashes)");
+      }
+      if (rule.name.starts_with("brows_") && given(rule.name.c_str()) && !brows) {
+        where.at(rule.name).fail("", "the scene's first eye has no brows (scene-format.md: brows)");
       }
     }
     // JPEG holds 8 bits: no set may draw a JPEG quality and a deeper image
@@ -774,13 +779,14 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
     for (const FaceKey& key : kFaceKeys) {
       if (auto v = value(std::string(key.name))) look.face.value().*key.member = *v;
     }
-    if (look.face->lashes) {
-      Lashes& lashes = *look.face->lashes;
-      for (const LashKey& key : kLashKeys) {
-        if (auto v = value("lash_" + std::string(key.name))) lashes.*key.member = *v;
+    const auto draw_hairs = [&](const std::string& prefix, auto& hairs, const auto& keys) {
+      for (const auto& key : keys) {
+        if (auto v = value(prefix + std::string(key.name))) hairs.*key.member = *v;
       }
-      if (auto v = value("lash_seed")) lashes.seed = static_cast<std::uint64_t>(*v);
-    }
+      if (auto v = value(prefix + "seed")) hairs.seed = static_cast<std::uint64_t>(*v);
+    };
+    if (look.face->lashes) draw_hairs("lash_", *look.face->lashes, kLashKeys);
+    if (look.face->brows) draw_hairs("brows_", *look.face->brows, kBrowKeys);
   }
   const double yaw = value("head_yaw_deg").value_or(0), pitch = value("head_pitch_deg").value_or(0),
                roll = value("head_roll_deg").value_or(0);

@@ -29,6 +29,14 @@ json number(double v) {
   return v == 0 ? 0.0 : v;  // no "-0.0" in files
 }
 json degrees(double radians) { return number(radians * kDegreesPerRadian); }
+// A face's lashes or brows: their numbers and seed.
+template <class Hairs, std::size_t N>
+json hairs_json(const Hairs& hairs, const std::array<HairKey<Hairs>, N>& keys) {
+  json o = json::object();
+  for (const HairKey<Hairs>& key : keys) o[std::string(key.name)] = number(hairs.*key.member);
+  o["seed"] = hairs.seed;
+  return o;
+}
 json triple(double x, double y, double z) {
   if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return nullptr;
   return json::array({number(x), number(y), number(z)});
@@ -153,13 +161,8 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   if (a.face) {
     face = {{"side", to_string(a.face->side)}};
     for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = number(a.face.value().*key.member);
-    json lashes(nullptr);
-    if (a.face->lashes) {
-      lashes = json::object();
-      for (const LashKey& key : kLashKeys) lashes[std::string(key.name)] = number(a.face->lashes.value().*key.member);
-      lashes["seed"] = a.face->lashes->seed;
-    }
-    face["lashes"] = lashes;
+    face["lashes"] = a.face->lashes ? hairs_json(*a.face->lashes, kLashKeys) : json(nullptr);
+    face["brows"] = a.face->brows ? hairs_json(*a.face->brows, kBrowKeys) : json(nullptr);
   }
   look["face"] = face;
   // The textures and the tear film only when on (as in scene files).

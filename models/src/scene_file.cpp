@@ -134,6 +134,19 @@ Sensor read_sensor(Object& s, Sensor sensor, std::optional<double> focal_length_
   return sensor;
 }
 
+// A face's lashes or brows: its numbers within their bounds and a seed.
+template <class Hairs, std::size_t N>
+Hairs read_hairs(const Value& value, const std::array<HairKey<Hairs>, N>& keys) {
+  Object o(value);
+  Hairs hairs;
+  for (const HairKey<Hairs>& key : keys) {
+    hairs.*key.member = o.within_or(std::string(key.name), key.low, key.high, hairs.*key.member);
+  }
+  if (auto seed = o.optional("seed")) hairs.seed = seed->as_exact_count();
+  o.finish();
+  return hairs;
+}
+
 Camera read_camera(Object& c, std::size_t index) {
   const std::string name = c.get_or<std::string>("name", "cam" + std::to_string(index));
   if (name.empty()) c.required("name").fail("must not be empty");
@@ -577,16 +590,8 @@ EyeAppearance read_appearance(Object& e) {
     for (const FaceKey& key : kFaceKeys) {
       face.*key.member = o.within_or(std::string(key.name), key.low, key.high, face.*key.member);
     }
-    if (auto lashes_value = o.optional("lashes")) {
-      Object l(*lashes_value);
-      Lashes lashes;
-      for (const LashKey& key : kLashKeys) {
-        lashes.*key.member = l.within_or(std::string(key.name), key.low, key.high, lashes.*key.member);
-      }
-      if (auto seed = l.optional("seed")) lashes.seed = seed->as_exact_count();
-      l.finish();
-      face.lashes = lashes;
-    }
+    if (auto lashes = o.optional("lashes")) face.lashes = read_hairs(*lashes, kLashKeys);
+    if (auto brows = o.optional("brows")) face.brows = read_hairs(*brows, kBrowKeys);
     o.finish();
     a.face = face;
   }
@@ -821,6 +826,14 @@ ordered_json sensor_json(const Sensor& s) {
   return o;
 }
 
+template <class Hairs, std::size_t N>
+ordered_json hairs_json(const Hairs& hairs, const std::array<HairKey<Hairs>, N>& keys) {
+  ordered_json o;
+  for (const HairKey<Hairs>& key : keys) o[std::string(key.name)] = hairs.*key.member;
+  o["seed"] = hairs.seed;
+  return o;
+}
+
 ordered_json camera_json(const Camera& c) {
   const Intrinsics& k = c.intrinsics();
   const Distortion& d = c.distortion();
@@ -910,12 +923,8 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
       const Face& f = *a.face;
       ordered_json face = {{"side", to_string(f.side)}};
       for (const FaceKey& key : kFaceKeys) face[std::string(key.name)] = f.*key.member;
-      if (f.lashes) {
-        ordered_json lashes;
-        for (const LashKey& key : kLashKeys) lashes[std::string(key.name)] = f.lashes.value().*key.member;
-        lashes["seed"] = f.lashes->seed;
-        face["lashes"] = lashes;
-      }
+      if (f.lashes) face["lashes"] = hairs_json(*f.lashes, kLashKeys);
+      if (f.brows) face["brows"] = hairs_json(*f.brows, kBrowKeys);
       o["face"] = face;
     }
     o["head"] = {{"forward", direction(a.head_forward)}, {"up", direction(a.head_up)}};

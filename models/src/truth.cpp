@@ -119,6 +119,7 @@ const char* to_string(Occluder o) {
     case Occluder::none: return "none";
     case Occluder::skin: return "skin";
     case Occluder::lash: return "lash";
+    case Occluder::brow: return "brow";
     case Occluder::mesh: return "mesh";
     case Occluder::eye: return "eye";
   }

@@ -88,7 +88,7 @@ class GlintLabel:
     reflected: Optional[np.ndarray]
     incidence_deg: Optional[float]
     on_cap: Optional[bool]
-    #: For status "occluded": "skin", "lash", "mesh" or "eye" (what the camera sees in front, else what shadows it).
+    #: For status "occluded": "skin", "lash", "brow", "mesh" or "eye" (what the camera sees in front, else what shadows it).
     occluded_by: Optional[str] = None
 
     @property
@@ -120,7 +120,7 @@ class DistractorLabel:
     point_mm: np.ndarray
     normal: np.ndarray
     incidence_deg: float
-    #: For status "occluded": "skin", "lash", "mesh" or "eye" (the cornea included).
+    #: For status "occluded": "skin", "lash", "brow", "mesh" or "eye" (the cornea included).
     occluded_by: Optional[str] = None
     #: For a ghost: the lens's index in the scene's spectacle_lenses, and its name.
     spectacle_lens: Optional[int] = None
@@ -155,7 +155,7 @@ class RefractedPoint:
     inner_direction: Optional[np.ndarray]
     outer_direction: Optional[np.ndarray]
     on_cap: Optional[bool]
-    #: For status "occluded": "skin", "lash", "mesh" or "eye" (what the camera sees in front of it).
+    #: For status "occluded": "skin", "lash", "brow", "mesh" or "eye" (what the camera sees in front of it).
     occluded_by: Optional[str] = None
 
     @property

@@ -448,6 +448,7 @@ LABEL_COLOURS = {
     "ok": ("#33ff33", "seen"),
     "skin": ("#ff9900", "hidden by skin"),
     "lash": ("#ff33ff", "hidden by a lash"),
+    "brow": ("#cc66ff", "hidden by a brow"),
     "mesh": ("#3399ff", "hidden by a mesh"),
     "eye": ("#ff3333", "hidden by the eye"),
     "distractor": ("#00ffff", "distractor (no glint)"),  # a seen distractor, not a status
@@ -457,7 +458,7 @@ LABEL_COLOURS = {
 def draw_labels(ax, view, origin: Tuple[float, float] = (0.0, 0.0), scale: float = 1.0) -> Dict[str, int]:
     """Draws one view's labels (a `View` of `Labels`) on an axes showing its
     image: each glint as a +, each pupil-border point as a dot, coloured by
-    status (seen; hidden by skin, a lash, a mesh or the eye: `occluded_by`),
+    status (seen; hidden by skin, a lash or brow, a mesh or the eye: `occluded_by`),
     the whole pupil's ellipse dashed and its refracted centre as an x, and
     each distractor the camera sees (a wet eye's highlight, a lens's ghost) as a cyan
     square (key "distractor").

@@ -165,7 +165,7 @@ void bind_render(py::module_& m) {
                                for (std::size_t i = 0; i < id.values.size(); ++i) data[i] = static_cast<std::uint8_t>(id.values[i]);
                                return out;
                              },
-                             "Pixel classes, uint8: 0 background, 1 skin, 2 sclera, 3 iris, 4 pupil, 5 lash.")
+                             "Pixel classes, uint8: 0 background, 1 skin, 2 sclera, 3 iris, 4 pupil, 5 lash, 6 brow.")
       .def("_truth_json", [](const Rendered& r) { return truth_to_json(r.scene, r.result.truth); })
       .def_property_readonly("glints",
                              [](const Rendered& r) {

@@ -1,5 +1,5 @@
 // Segmentation images as indexed PNG through libpng: OpenImageIO writes no
-// palette PNG, and an 8-bit grey image of the classes 0..5 shows black in
+// palette PNG, and an 8-bit grey image of the classes 0..6 shows black in
 // every viewer. The project's one libpng adapter.
 
 #include <png.h>
@@ -17,8 +17,8 @@
 namespace purkinje::renderer {
 namespace {
 
-constexpr int kClassCount = 6;
-// background, skin, sclera, iris, pupil, lash: distinct at a glance.
+constexpr int kClassCount = 7;
+// background, skin, sclera, iris, pupil, lash, brow: distinct at a glance.
 constexpr std::array<png_color, kClassCount> kPalette = {{
     {0, 0, 0},
     {222, 170, 135},
@@ -26,6 +26,7 @@ constexpr std::array<png_color, kClassCount> kPalette = {{
     {60, 110, 200},
     {200, 30, 60},
     {250, 200, 0},
+    {120, 70, 30},
 }};
 
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& reason) {

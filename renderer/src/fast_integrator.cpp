@@ -39,9 +39,9 @@ constexpr GridSpacing kDiffuseCacheSpacing{32, 8};
 constexpr double kDiffuseTolerance = 0.005;
 constexpr int kDiffuseCacheRays = 64;
 constexpr int kDiffuseMissRays = 16;
-// A lash (no cache node lies on one: they are seen through) takes the
+// A hair (no cache node lies on one: they are seen through) takes the
 // cached light behind it, or gathers fewer: its albedo is low, its pixels few.
-constexpr int kLashGatherRays = 4;
+constexpr int kHairGatherRays = 4;
 // The visibility cache (screen_cache.h): its nodes trace every light's
 // shadow ray; a point between four that agree traces none. Coarse nodes
 // every 8 px, and every 2 px in the coarse cells whose corners disagree or
@@ -120,7 +120,7 @@ class FastIntegrator final : public PathIntegrator {
       : scene_(scene),
         camera_(camera),
         tracer_(tracer),
-        lashes_(tracer.has_lashes()),
+        hair_(tracer.has_hair()),
         lights_(lights_of(scene, camera)),
         seen_(scene, lights_),
         seed_(options.seed) {
@@ -247,14 +247,14 @@ class FastIntegrator final : public PathIntegrator {
   }
 
   // The first diffuse point along the transmitted chain of the camera ray
-  // through `image_position`, seen through the lashes (for the caches'
-  // nodes: what lies behind a lash is smooth, a lash's own light is
+  // through `image_position`, seen through the hairs (for the caches'
+  // nodes: what lies behind a hair is smooth, a hair's own light is
   // gathered by its samples).
   DiffusePoint diffuse_point_at(const Pixel& image_position) const {
     Ray ray{camera_.center(), camera_.back_project(image_position)};
     double path_mm = 0;
     for (int depth = 0; depth <= max_depth_; ++depth) {
-      const Hit hit = tracer_.intersect_except_lashes(ray);
+      const Hit hit = tracer_.intersect_except_hair(ray);
       path_mm += hit.t;
       switch (scattering_of(hit.surface)) {
         case Scattering::diffuse: {
@@ -283,12 +283,12 @@ class FastIntegrator final : public PathIntegrator {
                        Contribution& out) const {
     PerLight scratch(lights_.size());  // written by the cache or the gather
     double* e = scratch.data();
-    // A lash takes the cached light of the surface behind it, a few
-    // millimetres away (no node lies on a lash).
-    const bool lash = p.surface == Surface::lash;
-    if (!diffuse_->irradiance(primary.image_position, lash ? diffuse_point_at(primary.image_position) : p, e)) {
+    // A hair takes the cached light of the surface behind it, a few
+    // millimetres away (no node lies on a hair).
+    const bool hair = is_hair(p.surface);
+    if (!diffuse_->irradiance(primary.image_position, hair ? diffuse_point_at(primary.image_position) : p, e)) {
       std::fill(e, e + lights_.size(), 0.0);
-      gather_hemisphere(p.point, p.normal, lash ? kLashGatherRays : kDiffuseMissRays, kCacheMissStream,
+      gather_hemisphere(p.point, p.normal, hair ? kHairGatherRays : kDiffuseMissRays, kCacheMissStream,
                         primary.path, e);
     }
     for (std::size_t k = 0; k < lights_.size(); ++k) out.add(scaled_albedo * kInvPi * e[k], lights_[k]);
@@ -365,9 +365,9 @@ class FastIntegrator final : public PathIntegrator {
       const double cos_theta = dot(n, to_light) / std::sqrt(d2);
       if (!(cos_theta > 0)) continue;
       if (agreed && k < VisibilityCache::kMaxLights && (agreed->known >> k & 1)) {
-        // The cache's nodes ignore the lashes (lit()): their thin shadows
-        // are traced here, against the lashes alone.
-        if (!(agreed->lit >> k & 1) || (lashes_ && tracer_.occluded_by_lashes(origin, l.position))) continue;
+        // The cache's nodes ignore the hairs (lit()): their thin shadows
+        // are traced here, against the hairs alone.
+        if (!(agreed->lit >> k & 1) || (hair_ && tracer_.occluded_by_hair(origin, l.position))) continue;
       } else if (tracer_.occluded(origin, l.position)) {
         continue;
       }
@@ -388,12 +388,12 @@ class FastIntegrator final : public PathIntegrator {
     return e;
   }
 
-  // Whether `light` lights a point facing `normal`, lashes aside (the
-  // visibility cache's nodes: lashes' shadows are too thin to interpolate;
+  // Whether `light` lights a point facing `normal`, hairs aside (the
+  // visibility cache's nodes: hairs' shadows are too thin to interpolate;
   // direct_light traces them per sample).
   bool lit(const Point3& point, const Vector3& normal, const Light& light) const {
     return dot(normal, light.position - point) > 0 &&
-           !tracer_.occluded_except_lashes(point + normal * kRayOffsetMm, light.position);
+           !tracer_.occluded_except_hair(point + normal * kRayOffsetMm, light.position);
   }
 
   // A square grid of nodes on an eye's iris plane (eye frame, centred on
@@ -618,7 +618,7 @@ class FastIntegrator final : public PathIntegrator {
   const Scene& scene_;
   const Camera& camera_;
   const RayTracer& tracer_;
-  bool lashes_;  // the scene has lashes: settled shadow rays are traced against them
+  bool hair_;  // the scene has lashes or brows: settled shadow rays are traced against them
   std::vector<Light> lights_;
   SeenLights seen_;  // the lights through spectacle lenses
   int max_depth_ = specular_depth(scene_, kMaxSpecularDepth);

@@ -133,7 +133,7 @@ std::vector<Refine> Film::refinement(const PixelRegion& region, const PixelRegio
   return edges;
 }
 
-void Film::add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes) {
+void Film::add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes, bool brows) {
   pool.give(coverage_[0]);  // the background's: only adaptive sampling needed it
   aovs.push_back({"depth", std::move(depth_)});
   aovs.push_back({"N.x", std::move(nx_)});
@@ -144,10 +144,13 @@ void Film::add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes)
   aovs.push_back({"sclera", std::move(coverage_[2])});
   aovs.push_back({"iris", std::move(coverage_[3])});
   aovs.push_back({"pupil", std::move(coverage_[4])});
-  if (lashes) {
-    aovs.push_back({"lash", std::move(coverage_[5])});
-  } else {
-    pool.give(coverage_[5]);
+  // A class of hairs only in images of scenes that have them.
+  for (const auto& [name, c, present] : {std::tuple{"lash", 5, lashes}, std::tuple{"brow", 6, brows}}) {
+    if (present) {
+      aovs.push_back({name, std::move(coverage_[c])});
+    } else {
+      pool.give(coverage_[c]);
+    }
   }
   aovs.push_back({"cornea", std::move(cornea_)});
 }

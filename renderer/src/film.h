@@ -44,7 +44,7 @@ class PlanePool {
 enum class Refine : std::uint8_t { no = 0, texture, outline, strong_edge };
 
 // The segmentation's classes: background, skin, sclera, iris, pupil, lash.
-constexpr int kClasses = 6;
+constexpr int kClasses = 7;
 
 class Film {
  public:
@@ -80,7 +80,7 @@ class Film {
   // The fraction of each pixel's samples that saw a class first.
   const ImagePlane& coverage(PixelClass c) const { return coverage_[static_cast<int>(c)]; }
   ImagePlane& diffuse_electrons() { return diffuse_electrons_; }
-  void add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes);
+  void add_aovs(std::vector<NamedPlane>& aovs, PlanePool& pool, bool lashes, bool brows);
 
  private:
   ImagePlane radiance_, diffuse_electrons_, depth_, nx_, ny_, nz_, id_;

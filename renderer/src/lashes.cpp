@@ -26,8 +26,8 @@ double arc_at(const MarginEdge& edge, const std::vector<double>& arc, double u) 
 
 }  // namespace
 
-std::vector<LashSegment> build_lashes(const Lashes& lashes, const MarginEdge& edge, bool upper, std::uint64_t stream) {
-  std::vector<LashSegment> segments;
+std::vector<HairSegment> build_lashes(const Lashes& lashes, const MarginEdge& edge, bool upper, std::uint64_t stream) {
+  std::vector<HairSegment> segments;
   if (edge.points.size() < 2) return segments;
   std::vector<double> arc(edge.points.size(), 0.0);
   for (std::size_t i = 1; i < arc.size(); ++i) arc[i] = arc[i - 1] + (edge.points[i] - edge.points[i - 1]).norm();
@@ -63,23 +63,28 @@ std::vector<LashSegment> build_lashes(const Lashes& lashes, const MarginEdge& ed
     const double tilt = lashes.root_deg * kDeg + 10 * kDeg * jitter(3);
     const double curl = middle_curl * (1 + 0.4 * jitter(4));
 
-    // A chord of an arc of constant curvature: along the mean angle, its
-    // length the arc's times sinc(half the turn).
-    const double step = length / kLashSegments;
-    const double turn = curl / kLashSegments;
-    const double chord = std::abs(turn) > 1e-12 ? step * std::sin(0.5 * turn) / (0.5 * turn) : step;
-    Point3 a = root - n * root_radius;  // sunk into the skin: no gap at the root
-    for (int j = 0; j < kLashSegments; ++j) {
-      const double mid = (j + 0.5) / kLashSegments;
-      const double angle = -tilt + curl * mid;
-      const Vector3 direction =
-          (n * std::cos(angle) + r * std::sin(angle)) * std::cos(fan) + t * std::sin(fan);
-      const Point3 b = a + direction * chord;
-      segments.push_back({a, b, root_radius * (1 - 2.0 / 3.0 * mid)});
-      a = b;
-    }
+    append_hair(segments, root, n, r, t, -tilt, curl, fan, length, root_radius, kLashSegments);
   }
   return segments;
+}
+
+void append_hair(std::vector<HairSegment>& segments, const Point3& root, const Vector3& n, const Vector3& r,
+                 const Vector3& t, double root_angle, double curl, double fan, double length, double root_radius,
+                 int count) {
+  // A chord of an arc of constant curvature: along the mean angle, its
+  // length the arc's times sinc(half the turn).
+  const double step = length / count;
+  const double turn = curl / count;
+  const double chord = std::abs(turn) > 1e-12 ? step * std::sin(0.5 * turn) / (0.5 * turn) : step;
+  Point3 a = root - n * root_radius;  // sunk into the skin: no gap at the root
+  for (int j = 0; j < count; ++j) {
+    const double mid = (j + 0.5) / count;
+    const double angle = root_angle + curl * mid;
+    const Vector3 direction = (n * std::cos(angle) + r * std::sin(angle)) * std::cos(fan) + t * std::sin(fan);
+    const Point3 b = a + direction * chord;
+    segments.push_back({a, b, root_radius * (1 - 2.0 / 3.0 * mid)});
+    a = b;
+  }
 }
 
 }  // namespace purkinje::renderer

@@ -22,7 +22,8 @@ Scattering scattering_of(Surface surface) {
     case Surface::skin:
     case Surface::sclera:
     case Surface::mesh:
-    case Surface::lash: return Scattering::diffuse;
+    case Surface::lash:
+    case Surface::brow: return Scattering::diffuse;
     case Surface::iris: return Scattering::iris;
     case Surface::pupil: return Scattering::pupil;
     case Surface::cornea_anterior:
@@ -50,6 +51,14 @@ bool scene_has_lashes(const Scene& scene) {
   return false;
 }
 
+bool scene_has_brows(const Scene& scene) {
+  for (const Eye& eye : scene.eyes) {
+    const auto& face = eye.appearance().face;
+    if (face && face->brows) return true;
+  }
+  return false;
+}
+
 bool scene_has_distractors(const Scene& scene) {
   if (!scene.spectacle_lenses.empty()) return true;
   for (const Eye& eye : scene.eyes) {
@@ -68,6 +77,7 @@ PixelClass class_of(Surface s) {
     case Surface::iris: return PixelClass::iris;
     case Surface::pupil: return PixelClass::pupil;
     case Surface::lash: return PixelClass::lash;
+    case Surface::brow: return PixelClass::brow;
     default: return PixelClass::background;
   }
 }
@@ -100,6 +110,8 @@ double diffuse_albedo(const Scene& scene, const Hit& hit) {
     case Surface::lash:
       // Inside a lash (a ray from its own surface inward): nothing returns.
       return hit.front_face ? scene.eyes[hit.eye].appearance().face->lashes->albedo : 0.0;
+    case Surface::brow:
+      return hit.front_face ? scene.eyes[hit.eye].appearance().face->brows->albedo : 0.0;
     case Surface::sclera:
       return hit.front_face ? textured_sclera_albedo(scene.eyes[hit.eye], hit.point) : 0.0;
     case Surface::iris: {

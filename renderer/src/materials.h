@@ -53,8 +53,11 @@ struct PrimaryRecord {
 };
 PixelClass class_of(Surface s);
 // Whether any eye of the scene has lashes (its images then have a lash
-// class and coverage plane).
+// class and coverage plane), or brows (a brow class and plane).
 bool scene_has_lashes(const Scene& scene);
+bool scene_has_brows(const Scene& scene);
+// Lashes and brows: thin hairs, seen through by the fast mode's caches.
+constexpr bool is_hair(Surface s) { return s == Surface::lash || s == Surface::brow; }
 // Whether the scene mirrors lights other than in corneas: an eye with a
 // tear film (a wet sclera's highlights) or a spectacle lens (its ghosts);
 // its images then have a distractor mask.

@@ -36,12 +36,12 @@
 // masks, the cornea also gets its own mask bit so that traversal skips it.
 // Spectacle lenses the same, skipped by every occlusion query.
 //
-// Lashes: one user primitive per capsule, intersected in double precision
-// like the eyes' surfaces (not Embree's curves, which are intersected in
-// float by kernels that differ between instruction sets). They have their
-// own mask bit and flag (queries that look through them), and sit in a
-// second scene of their own too (occluded_by_lashes: a shadow ray tested
-// against the lashes alone traverses only their tree).
+// Hairs (lashes and brows): one user primitive per capsule, intersected in
+// double precision like the eyes' surfaces (not Embree's curves, which are
+// intersected in float by kernels that differ between instruction sets).
+// They have their own mask bit and flag (queries that look through them),
+// and sit in a second scene of their own too (occluded_by_hair: a shadow
+// ray tested against the hairs alone traverses only their tree).
 
 #include "purkinje/renderer/ray_tracer.h"
 
@@ -70,13 +70,13 @@ namespace {
 
 constexpr unsigned kCorneaMask = 1u;
 constexpr unsigned kOtherMask = 2u;
-constexpr unsigned kLashMask = 4u;
+constexpr unsigned kHairMask = 4u;
 constexpr unsigned kLensMask = 8u;
 
 // Which surfaces a query skips.
 struct Skip {
   bool cornea = false;
-  bool lashes = false;
+  bool hair = false;
   bool lenses = false;
 };
 
@@ -167,7 +167,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     lane.t_hi = t;
     lane.surface = &surface;
     lane.mesh = nullptr;
-    lane.lashes = nullptr;
+    lane.hairs = nullptr;
     lane.local_point = local_point;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
     set_hit(hits, args->N, i, args->geomID, args->primID, query->embree.instID[0]);
@@ -207,7 +207,7 @@ void mesh_intersect_filter(const RTCFilterFunctionNArguments* args) {
     lane.t_hi = t;
     lane.surface = nullptr;
     lane.mesh = &mesh;
-    lane.lashes = nullptr;
+    lane.hairs = nullptr;
     lane.primitive = triangle;
     RTCRayN_tfar(args->ray, args->N, i) = embree_far(t - lane.t_shift);
   }
@@ -228,44 +228,44 @@ void mesh_occluded_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
-// An eye's lashes: one user primitive per capsule, as the surfaces'
+// An eye's lashes or brows: one user primitive per capsule, as the surfaces'
 // callbacks but indexed by primID.
-void lash_bounds_callback(const RTCBoundsFunctionArguments* args) {
-  set_bounds(static_cast<const PlacedLashes*>(args->geometryUserPtr)->bounds(args->primID), args->bounds_o);
+void hair_bounds_callback(const RTCBoundsFunctionArguments* args) {
+  set_bounds(static_cast<const PlacedHairs*>(args->geometryUserPtr)->bounds(args->primID), args->bounds_o);
 }
 
-void lash_intersect_callback(const RTCIntersectFunctionNArguments* args) {
+void hair_intersect_callback(const RTCIntersectFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
-  if (query->skip.lashes) return;
-  const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
+  if (query->skip.hair) return;
+  const auto& hairs = *static_cast<const PlacedHairs*>(args->geometryUserPtr);
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
   RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Lane& lane = query->lanes[RTCRayN_id(rays, args->N, i)];
     double t;
-    if (!lashes.hit(lane, args->primID, t)) continue;
+    if (!hairs.hit(lane, args->primID, t)) continue;
     lane.t_hi = t;
     lane.surface = nullptr;
     lane.mesh = nullptr;
-    lane.lashes = &lashes;
+    lane.hairs = &hairs;
     lane.primitive = args->primID;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
     set_hit(hits, args->N, i, args->geomID, args->primID, query->embree.instID[0]);
   }
 }
 
-void lash_occluded_callback(const RTCOccludedFunctionNArguments* args) {
+void hair_occluded_callback(const RTCOccludedFunctionNArguments* args) {
   auto* query = reinterpret_cast<Query*>(args->context);
-  if (query->skip.lashes) return;
-  const auto& lashes = *static_cast<const PlacedLashes*>(args->geometryUserPtr);
+  if (query->skip.hair) return;
+  const auto& hairs = *static_cast<const PlacedHairs*>(args->geometryUserPtr);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     Lane& lane = query->lanes[RTCRayN_id(args->ray, args->N, i)];
     if (lane.found()) continue;
     double t;
-    if (!lashes.hit(lane, args->primID, t)) continue;
-    lane.lashes = &lashes;
+    if (!hairs.hit(lane, args->primID, t)) continue;
+    lane.hairs = &hairs;
     lane.primitive = args->primID;
     RTCRayN_tfar(args->ray, args->N, i) = -INFINITY;  // Embree's "occluded"
   }
@@ -314,11 +314,11 @@ inline void check_ray(const Point3& origin, const Vector3& direction, double t_m
 struct RayTracer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
-  RTCScene lash_scene = nullptr;  // the lashes alone (occluded_by_lashes); none without lashes
-  Box lash_bounds{{0, 0, 0}, {0, 0, 0}};  // of every lash, padded
+  RTCScene hair_scene = nullptr;  // the lashes and brows alone (occluded_by_hair); none without
+  std::vector<Box> hair_bounds;  // of each group of hairs (an eye's lashes, its brows), padded
   SurfaceList surfaces;
   std::vector<std::unique_ptr<PlacedMesh>> meshes;
-  std::vector<std::unique_ptr<PlacedLashes>> lashes;
+  std::vector<std::unique_ptr<PlacedHairs>> hairs;
   Box bounds{{0, 0, 0}, {0, 0, 0}};
   double diagonal = 0;  // of the bounds: no ray from inside stays inside longer
   bool empty = true;
@@ -329,7 +329,7 @@ struct RayTracer::Impl {
   std::string error_message;
 
   ~Impl() {
-    if (lash_scene) rtcReleaseScene(lash_scene);
+    if (hair_scene) rtcReleaseScene(hair_scene);
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
   }
@@ -373,7 +373,7 @@ struct RayTracer::Impl {
 
   // Runs the query on `lane`, whose `surface` is left null when nothing is hit.
   template <bool kOcclusion>
-  // On `in`, the whole scene unless given (the lashes' own scene).
+  // On `in`, the whole scene unless given (the hairs' own scene).
   void run(Lane& lane, Skip skip, RTCScene in = nullptr) const {
     Point3 start;
     float tfar = 0;
@@ -397,7 +397,7 @@ struct RayTracer::Impl {
     ray.tfar = tfar;
     ray.mask = ~0u;
     if (masks && skip.cornea) ray.mask &= ~kCorneaMask;
-    if (masks && skip.lashes) ray.mask &= ~kLashMask;
+    if (masks && skip.hair) ray.mask &= ~kHairMask;
     if (masks && skip.lenses) ray.mask &= ~kLensMask;
     ray.id = 0;  // the lane
     ray.flags = 0;
@@ -494,7 +494,7 @@ struct RayTracer::Impl {
     if (!segment_lane(to, from, lane)) return Surface::none;
     skip.lenses = true;
     run<false>(lane, skip);
-    return lane.surface ? lane.surface->kind() : lane.mesh ? lane.mesh->kind() : lane.lashes ? Surface::lash : Surface::none;
+    return lane.surface ? lane.surface->kind() : lane.mesh ? lane.mesh->kind() : lane.hairs ? lane.hairs->kind() : Surface::none;
   }
 
   // One Embree triangle geometry; its filters recompute hits in double.
@@ -531,7 +531,7 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   SceneGeometry geometry = build_scene_geometry(scene);
   impl.surfaces = std::move(geometry.surfaces);
   impl.meshes = std::move(geometry.meshes);
-  impl.lashes = std::move(geometry.lashes);
+  impl.hairs = std::move(geometry.hairs);
 
   const EmbreeDevice wanted = embree_device();
   impl.device = rtcNewDevice(wanted.config.c_str());
@@ -583,40 +583,39 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     const Box b = mesh->world_bounds();
     bounds = united(bounds, b);
   }
-  if (!impl.lashes.empty()) {
-    impl.lash_scene = rtcNewScene(impl.device);
-    impl.check("creating the lashes' scene");
-    rtcSetSceneFlags(impl.lash_scene, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(impl.lash_scene, RTC_BUILD_QUALITY_HIGH);
+  if (!impl.hairs.empty()) {
+    impl.hair_scene = rtcNewScene(impl.device);
+    impl.check("creating the hairs' scene");
+    rtcSetSceneFlags(impl.hair_scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl.hair_scene, RTC_BUILD_QUALITY_HIGH);
   }
-  for (const auto& lashes : impl.lashes) {
-    // In the whole scene and in the lashes' own (a geometry can be
+  for (const auto& hairs : impl.hairs) {
+    // In the whole scene and in the hairs' own (a geometry can be
     // attached to one scene only: two geometries share the capsules).
-    for (RTCScene in : {impl.scene, impl.lash_scene}) {
+    for (RTCScene in : {impl.scene, impl.hair_scene}) {
       RTCGeometry geometry = rtcNewGeometry(impl.device, RTC_GEOMETRY_TYPE_USER);
       impl.check("creating a user geometry");
-      rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(lashes->segments().size()));
-      rtcSetGeometryUserData(geometry, lashes.get());
-      rtcSetGeometryBoundsFunction(geometry, &lash_bounds_callback, nullptr);
-      rtcSetGeometryIntersectFunction(geometry, &lash_intersect_callback);
-      rtcSetGeometryOccludedFunction(geometry, &lash_occluded_callback);
-      if (impl.masks) rtcSetGeometryMask(geometry, kLashMask);
+      rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(hairs->segments().size()));
+      rtcSetGeometryUserData(geometry, hairs.get());
+      rtcSetGeometryBoundsFunction(geometry, &hair_bounds_callback, nullptr);
+      rtcSetGeometryIntersectFunction(geometry, &hair_intersect_callback);
+      rtcSetGeometryOccludedFunction(geometry, &hair_occluded_callback);
+      if (impl.masks) rtcSetGeometryMask(geometry, kHairMask);
       rtcCommitGeometry(geometry);
       rtcAttachGeometry(in, geometry);
       rtcReleaseGeometry(geometry);
-      impl.check("adding lashes");
+      impl.check("adding hairs");
     }
-    const Box b = lashes->world_bounds();
-    impl.lash_bounds = &lashes == &impl.lashes.front() ? b : united(impl.lash_bounds, b);
-    bounds = united(bounds, b);
+    impl.hair_bounds.push_back(hairs->world_bounds());
+    bounds = united(bounds, impl.hair_bounds.back());
   }
   rtcCommitScene(impl.scene);
   impl.check("building the scene");
-  if (impl.lash_scene) {
-    rtcCommitScene(impl.lash_scene);
-    impl.check("building the lashes' scene");
+  if (impl.hair_scene) {
+    rtcCommitScene(impl.hair_scene);
+    impl.check("building the hairs' scene");
   }
-  impl.empty = impl.surfaces.empty() && impl.meshes.empty() && impl.lashes.empty();
+  impl.empty = impl.surfaces.empty() && impl.meshes.empty() && impl.hairs.empty();
   if (!impl.empty) {
     // A margin more, so that a float ray starting on this box starts
     // clear of every geometry's (padded) bounds.
@@ -678,28 +677,32 @@ Surface RayTracer::occluder_except_cornea(const Point3& from, const Point3& to) 
   return impl_->occluder(from, to, {.cornea = true});
 }
 
-bool RayTracer::has_lashes() const { return impl_->lash_scene != nullptr; }
+bool RayTracer::has_hair() const { return impl_->hair_scene != nullptr; }
 
-Hit RayTracer::intersect_except_lashes(const Ray& ray) const {
+Hit RayTracer::intersect_except_hair(const Ray& ray) const {
   check_ray(ray.origin, ray.direction, ray.t_min, ray.t_max);
   if (!(ray.t_min < ray.t_max)) return {};
   Lane lane = lane_of(ray);
-  impl_->run<false>(lane, {.lashes = true});
+  impl_->run<false>(lane, {.hair = true});
   return hit_of(ray, lane);
 }
 
-bool RayTracer::occluded_except_lashes(const Point3& from, const Point3& to) const {
-  return impl_->occluded(from, to, {.lashes = true});
+bool RayTracer::occluded_except_hair(const Point3& from, const Point3& to) const {
+  return impl_->occluded(from, to, {.hair = true});
 }
 
-bool RayTracer::occluded_by_lashes(const Point3& from, const Point3& to) const {
+bool RayTracer::occluded_by_hair(const Point3& from, const Point3& to) const {
   check_ray(from, to - from, 0, 0);
   check_ray(to, to - from, 0, 0);
-  // A box test first: cheaper than Embree's query for a shadow ray that
-  // passes the lashes by.
-  double t0 = 0, t1 = 1;
-  if (!impl_->lash_scene || !clip_to_box(impl_->lash_bounds, from, to - from, t0, t1)) return false;
-  return impl_->occluded(from, to, {}, impl_->lash_scene);
+  // Box tests first: cheaper than Embree's query for a shadow ray that
+  // passes the hairs by (a group's box each: an eye's lashes and its brows
+  // lie apart).
+  if (!impl_->hair_scene) return false;
+  const bool near = std::any_of(impl_->hair_bounds.begin(), impl_->hair_bounds.end(), [&](const Box& box) {
+    double t0 = 0, t1 = 1;
+    return clip_to_box(box, from, to - from, t0, t1);
+  });
+  return near && impl_->occluded(from, to, {}, impl_->hair_scene);
 }
 
 }  // namespace purkinje::renderer

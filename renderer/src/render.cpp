@@ -518,7 +518,7 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
   result.camera = camera_index;
   const RayTracer tracer(scene);
   // Labels agree with what the camera can see: a glint or pupil point whose
-  // light or view the lids, a lash, the sclera or a mesh blocks is occluded,
+  // light or view the lids, a lash or brow, the sclera or a mesh blocks is occluded,
   // with what the camera sees in front of it (or what shadows it).
   TruthOptions truth_options;
   truth_options.occluded = [&](const Point3& from, const Point3& to) {
@@ -526,6 +526,7 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
       case Surface::none: return Occluder::none;
       case Surface::skin: return Occluder::skin;
       case Surface::lash: return Occluder::lash;
+      case Surface::brow: return Occluder::brow;
       case Surface::mesh: return Occluder::mesh;
       default: return Occluder::eye;
     }
@@ -617,7 +618,7 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
                options.per_light_glint_masks ? &glint_planes : nullptr, result.glints);
   for (std::size_t i = 0; i < glint_total.values.size(); ++i) result.electrons.values[i] += glint_total.values[i];
 
-  film.add_aovs(result.aovs, pool, scene_has_lashes(scene));
+  film.add_aovs(result.aovs, pool, scene_has_lashes(scene), scene_has_brows(scene));
   result.aovs.push_back({"glint", fraction_of_signal(glint_total, result.electrons)});
   for (std::size_t l = 0; l < glint_planes.size(); ++l) {
     result.aovs.push_back({"glint." + scene.illuminators[l].name, fraction_of_signal(glint_planes[l], result.electrons)});

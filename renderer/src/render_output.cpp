@@ -161,6 +161,7 @@ std::string render_settings_json(const Scene& scene, int camera, const RenderOpt
 std::vector<std::string> exr_plane_names(const Scene& scene, const RenderOptions& options) {
   std::vector<std::string> names = {"Y", "electrons", "depth", "N.x", "N.y", "N.z", "id", "skin", "sclera", "iris", "pupil"};
   if (scene_has_lashes(scene)) names.push_back("lash");
+  if (scene_has_brows(scene)) names.push_back("brow");
   names.insert(names.end(), {"cornea", "glint"});
   if (options.per_light_glint_masks) {
     for (const Illuminator& light : scene.illuminators) names.push_back("glint." + light.name);

@@ -1,5 +1,6 @@
 #include "scene_geometry.h"
 #include "purkinje/models/check.h"
+#include "brows.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +22,7 @@ const char* to_string(Surface s) {
     case Surface::cornea_posterior: return "cornea_posterior";
     case Surface::mesh: return "mesh";
     case Surface::lash: return "lash";
+    case Surface::brow: return "brow";
     case Surface::spectacle_lens: return "spectacle_lens";
   }
   return "unknown";
@@ -188,10 +190,16 @@ void add_face(SceneGeometry& geometry, const Scene& scene, int index, const Eye&
   if (const auto& lashes = eye.appearance().face->lashes) {
     // Streams 2 index and 2 index + 1: each lid of each eye its own draws.
     const auto stream = 2 * static_cast<std::uint64_t>(index);
-    std::vector<LashSegment> segments = build_lashes(*lashes, face.upper_edge, true, stream);
-    const std::vector<LashSegment> lower = build_lashes(*lashes, face.lower_edge, false, stream + 1);
+    std::vector<HairSegment> segments = build_lashes(*lashes, face.upper_edge, true, stream);
+    const std::vector<HairSegment> lower = build_lashes(*lashes, face.lower_edge, false, stream + 1);
     segments.insert(segments.end(), lower.begin(), lower.end());
-    if (!segments.empty()) geometry.lashes.push_back(std::make_unique<PlacedLashes>(index, std::move(segments)));
+    if (!segments.empty()) geometry.hairs.push_back(std::make_unique<PlacedHairs>(Surface::lash, index, std::move(segments)));
+  }
+  if (const auto& brows = eye.appearance().face->brows) {
+    // Stream `index`: each eye its own draws (the seed is the brows' own).
+    std::vector<HairSegment> hairs =
+        build_brows(*brows, *eye.appearance().eyelids, *eye.appearance().face, face, H, static_cast<std::uint64_t>(index));
+    if (!hairs.empty()) geometry.hairs.push_back(std::make_unique<PlacedHairs>(Surface::brow, index, std::move(hairs)));
   }
   geometry.meshes.push_back(std::make_unique<PlacedMesh>(index, std::move(face)));
 
@@ -284,8 +292,8 @@ void add_lids(SceneGeometry& geometry, int index, const Scene& scene, std::size_
 
 }  // namespace
 
-bool PlacedLashes::hit(const Lane& lane, unsigned segment, double& t) const {
-  const LashSegment& c = segments_[segment];
+bool PlacedHairs::hit(const Lane& lane, unsigned segment, double& t) const {
+  const HairSegment& c = segments_[segment];
   // Solved from the ray's closest approach to the capsule's root end, so
   // that the coefficients are millimetre-sized whatever the ray's origin.
   const Vector3& d = lane.direction;  // unit
@@ -332,16 +340,16 @@ bool PlacedLashes::hit(const Lane& lane, unsigned segment, double& t) const {
   return true;
 }
 
-UnitVector3 PlacedLashes::normal(unsigned segment, const Point3& p) const {
-  const LashSegment& c = segments_[segment];
+UnitVector3 PlacedHairs::normal(unsigned segment, const Point3& p) const {
+  const HairSegment& c = segments_[segment];
   const Vector3 ba = c.b - c.a;
   const double h = std::clamp(dot(p - c.a, ba) / dot(ba, ba), 0.0, 1.0);
   const auto n = UnitVector3::try_normalize(p - (c.a + ba * h));
   return n ? *n : UnitVector3::normalize(ba);
 }
 
-Box PlacedLashes::bounds(unsigned segment) const {
-  const LashSegment& c = segments_[segment];
+Box PlacedHairs::bounds(unsigned segment) const {
+  const HairSegment& c = segments_[segment];
   const double extent = std::max({std::abs(c.a.x), std::abs(c.a.y), std::abs(c.a.z), std::abs(c.b.x),
                                   std::abs(c.b.y), std::abs(c.b.z)});
   const double pad = c.radius_mm + 1e-3 + 1e-6 * extent;
@@ -350,7 +358,7 @@ Box PlacedLashes::bounds(unsigned segment) const {
           Point3{std::max(c.a.x, c.b.x), std::max(c.a.y, c.b.y), std::max(c.a.z, c.b.z)} + p};
 }
 
-Box PlacedLashes::world_bounds() const {
+Box PlacedHairs::world_bounds() const {
   Box all{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
   for (unsigned i = 0; i < segments_.size(); ++i) {
     all = united(all, bounds(i));

@@ -76,7 +76,7 @@ using surfaces::Segment;
 
 class PlacedSurface;
 class PlacedMesh;
-class PlacedLashes;
+class PlacedHairs;
 
 // A local frame (eye or head), shared by the surfaces built in it: its Pose
 // and that Pose's inverse as plain numbers, so that the hot path's
@@ -114,7 +114,7 @@ struct Lane {
   // or a lash's capsule (at most one of the three set).
   const PlacedSurface* surface = nullptr;
   const PlacedMesh* mesh = nullptr;
-  const PlacedLashes* lashes = nullptr;
+  const PlacedHairs* hairs = nullptr;
   unsigned primitive = 0;  // the triangle or capsule
   Point3 local_point;
   // The ray in the last frame used: an eye's surfaces share one frame, so
@@ -124,7 +124,7 @@ struct Lane {
   Vector3 local_direction;
   double local_shift = 0;  // t of local_origin
 
-  bool found() const { return surface || mesh || lashes; }
+  bool found() const { return surface || mesh || hairs; }
 };
 
 // One Embree geometry: a shape placed in the world by its local frame.
@@ -303,17 +303,21 @@ class PlacedMesh {
   std::vector<UnitVector3> normals_;  // per vertex; empty: flat
 };
 
-// An eye's lashes (lashes.h): one Embree user primitive per capsule, each
+// An eye's lashes or its brows (lashes.h, brows.h): one Embree user
+// primitive per capsule, each
 // intersected in double precision as the analytic surfaces are (and
 // unlike Embree's own curves, which are intersected in float by kernels
 // that differ between instruction sets). Shaded with the capsule's
 // normal: a hair's fibre seen across.
-class PlacedLashes {
+class PlacedHairs {
  public:
-  PlacedLashes(int eye, std::vector<LashSegment> segments) : eye_(eye), segments_(std::move(segments)) {}
+  // `kind`: Surface::lash or Surface::brow.
+  PlacedHairs(Surface kind, int eye, std::vector<HairSegment> segments)
+      : kind_(kind), eye_(eye), segments_(std::move(segments)) {}
 
+  Surface kind() const { return kind_; }
   int eye() const { return eye_; }
-  const std::vector<LashSegment>& segments() const { return segments_; }
+  const std::vector<HairSegment>& segments() const { return segments_; }
 
   // The first crossing of capsule `segment` by the lane's ray in (t_lo, t_hi).
   bool hit(const Lane& lane, unsigned segment, double& t) const;
@@ -323,8 +327,9 @@ class PlacedLashes {
   Box world_bounds() const;
 
  private:
+  Surface kind_;
   int eye_;
-  std::vector<LashSegment> segments_;
+  std::vector<HairSegment> segments_;
 };
 
 using SurfaceList = std::vector<std::unique_ptr<PlacedSurface>>;
@@ -348,7 +353,7 @@ HeadPlacement head_placement(const Scene& scene, int eye);
 struct SceneGeometry {
   SurfaceList surfaces;
   std::vector<std::unique_ptr<PlacedMesh>> meshes;  // those with triangles
-  std::vector<std::unique_ptr<PlacedLashes>> lashes;  // eyes with at least one lash
+  std::vector<std::unique_ptr<PlacedHairs>> hairs;  // an eye's lashes, an eye's brows: those with at least one hair
 };
 SceneGeometry build_scene_geometry(const Scene& scene);
 
@@ -377,11 +382,11 @@ inline Hit hit_of(const Ray& ray, const Lane& lane) {
     // lean past the ray at a silhouette.
     hit.front_face = dot(ray.direction, mesh.normal(lane.primitive)) < 0;
     hit.normal = mesh.shading_normal(lane.primitive, hit.point);
-  } else if (lane.lashes) {
-    hit.surface = Surface::lash;
-    hit.eye = lane.lashes->eye();
+  } else if (lane.hairs) {
+    hit.surface = lane.hairs->kind();
+    hit.eye = lane.hairs->eye();
     hit.triangle = static_cast<int>(lane.primitive);
-    hit.normal = lane.lashes->normal(lane.primitive, hit.point);
+    hit.normal = lane.hairs->normal(lane.primitive, hit.point);
     hit.front_face = dot(ray.direction, hit.normal) < 0;
   } else {
     hit.surface = lane.surface->kind();

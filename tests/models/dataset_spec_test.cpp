@@ -364,6 +364,36 @@ TEST(DatasetSpec, TheLashParametersReachTheFirstEyesLashes) {
   }
 }
 
+TEST(DatasetSpec, TheBrowParametersReachTheFirstEyesBrows) {
+  const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/remote_face.json", "count": 10,
+      "parameters": {"brows_hairs_per_mm2": {"uniform": [0.5, 3]}, "brows_height_mm": {"uniform": [14, 20]},
+      "brows_width_mm": {"uniform": [6, 12]}, "brows_hair_length_mm": {"uniform": [6, 10]},
+      "brows_thickness_mm": {"uniform": [0.05, 0.1]}, "brows_lift_deg": {"uniform": [10, 30]},
+      "brows_curl_deg": {"uniform": [0, 30]}, "brows_albedo": {"choice": [0.1, 0.3]}, "brows_seed": {"choice": [3, 4]}}})",
+                                              "f.json", kFolder);
+  for (std::uint64_t k : {0u, 7u}) {
+    const ImageDraw d = draw_image(spec, k);
+    const Scene scene = scene_for_image(spec, d);
+    const Brows& brows = *scene.eyes[0].appearance().face->brows;
+    for (const BrowKey& key : kBrowKeys) {
+      EXPECT_EQ(brows.*key.member, column(spec, d, "brows_" + std::string(key.name))) << key.name;
+    }
+    EXPECT_EQ(static_cast<double>(brows.seed), column(spec, d, "brows_seed"));
+    // The other eye's brows stay as the scene has them.
+    EXPECT_EQ(scene.eyes[1].appearance().face->brows->seed, 2u);
+  }
+  // A scene without brows refuses them, naming the parameter.
+  try {
+    parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/headset.json", "count": 10,
+        "parameters": {"brows_albedo": {"uniform": [0.1, 0.3]}}})",
+                       "f.json", kFolder);
+    FAIL() << "accepted brows for a scene without them";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("brows_albedo"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no brows"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DatasetSpec, TheTearFilmsRoughnessAndMeniscusReachTheFirstEye) {
   const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/hard/headset_wet.json",
       "count": 10, "parameters": {"sclera_roughness_deg": {"uniform": [0, 6]}, "meniscus_radius_mm": {"uniform": [0.2, 0.4]}}})",

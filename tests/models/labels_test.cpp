@@ -179,7 +179,8 @@ TEST(Labels, TheEyesFaceIsWrittenAsTheSceneGivesIt) {
   EXPECT_EQ(face["crease_height_mm"].get<double>(), 0);
   EXPECT_EQ(face["midline_mm"].get<double>(), 31.5);  // the default
   EXPECT_TRUE(face["lashes"].is_null());
-  EXPECT_EQ(face.size(), 9u);
+  EXPECT_TRUE(face["brows"].is_null());
+  EXPECT_EQ(face.size(), 10u);  // side, the 7 keys, lashes, brows
 }
 
 TEST(Labels, TheEyesLashesAreWrittenAsTheSceneGivesThem) {
@@ -195,6 +196,23 @@ TEST(Labels, TheEyesLashesAreWrittenAsTheSceneGivesThem) {
   EXPECT_EQ(lashes["seed"].get<std::uint64_t>(), 12u);
   EXPECT_EQ(lashes["upper_length_mm"].get<double>(), Lashes{}.upper_length_mm);
   EXPECT_EQ(lashes.size(), kLashKeys.size() + 1);
+}
+
+TEST(Labels, TheEyesBrowsAreWrittenAsTheSceneGivesThem) {
+  const Scene scene = parse_scene(R"({ "format": 1, "name": "brows",
+    "cameras": [ { "resolution_px": [640, 480], "focal_length_mm": 16, "pixel_pitch_mm": 0.006,
+                   "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600] } ],
+    "illuminators": [ { "name": "a", "position_mm": [-100, 0, 0] }, { "name": "b", "position_mm": [100, 0, 0] } ],
+    "eyes": [ { "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": {}, "eyelids": {},
+                "face": { "brows": { "albedo": 0.25, "seed": 12 } } } ] })",
+                                  "brows.json");
+  const json face = json::parse(truth_to_json(scene, hand_made_truth()))["eyes"][0]["appearance"]["face"];
+  const json& brows = face["brows"];
+  EXPECT_EQ(brows["albedo"].get<double>(), 0.25);
+  EXPECT_EQ(brows["seed"].get<std::uint64_t>(), 12u);
+  EXPECT_EQ(brows["hair_length_mm"].get<double>(), Brows{}.hair_length_mm);
+  EXPECT_EQ(brows.size(), kBrowKeys.size() + 1);
+  EXPECT_TRUE(face["lashes"].is_null());
 }
 
 TEST(Labels, CsvHasOneRowPerFeatureAndEmptyCellsForMissingValues) {

@@ -661,6 +661,41 @@ TEST(SceneFile, LashErrorsNameTheKeyAndTheRule) {
   }
 }
 
+TEST(SceneFile, ReadsEveryBrowKeyAndWritesThemBack) {
+  const Scene scene = parse_scene(eye_with(R"("eyelids": {}, "face": { "brows": { "hairs_per_mm2": 2.5,
+      "height_mm": 18, "width_mm": 7, "hair_length_mm": 9, "thickness_mm": 0.06, "lift_deg": 30, "curl_deg": 10,
+      "albedo": 0.2, "seed": 5 } })"),
+                                  "s.json");
+  const Brows& b = *scene.eyes[0].appearance().face->brows;
+  EXPECT_DOUBLE_EQ(b.hairs_per_mm2, 2.5);
+  EXPECT_DOUBLE_EQ(b.height_mm, 18);
+  EXPECT_DOUBLE_EQ(b.width_mm, 7);
+  EXPECT_DOUBLE_EQ(b.hair_length_mm, 9);
+  EXPECT_DOUBLE_EQ(b.thickness_mm, 0.06);
+  EXPECT_DOUBLE_EQ(b.lift_deg, 30);
+  EXPECT_DOUBLE_EQ(b.curl_deg, 10);
+  EXPECT_DOUBLE_EQ(b.albedo, 0.2);
+  EXPECT_EQ(b.seed, 5u);
+  const Brows back = *parse_scene(scene_to_json(scene), "back.json").eyes[0].appearance().face->brows;
+  for (const BrowKey& key : kBrowKeys) EXPECT_EQ(back.*key.member, b.*key.member) << key.name;
+  EXPECT_EQ(back.seed, b.seed);
+  // "brows": {} is every default; without it, none.
+  const Scene defaults = parse_scene(eye_with(R"("eyelids": {}, "face": { "brows": {} })"), "s.json");
+  EXPECT_EQ(defaults.eyes[0].appearance().face->brows->hair_length_mm, Brows{}.hair_length_mm);
+  EXPECT_FALSE(parse_scene(eye_with(R"("eyelids": {}, "face": {})"), "s.json").eyes[0].appearance().face->brows);
+  // Errors name the key and the rule.
+  const std::map<std::string, std::string> bad = {
+      {R"({ "hairs_per_mm2": 7 })", "eyes[0].face.brows.hairs_per_mm2 = 7: must be between 0 and 6"},
+      {R"({ "lift_deg": 2 })", "eyes[0].face.brows.lift_deg = 2: must be between 5 and 60"},
+      {R"({ "seed": 0.5 })", "eyes[0].face.brows.seed = 0.5"},
+      {R"({ "colour": 1 })", "eyes[0].face.brows.colour = 1: unknown key"},
+  };
+  for (const auto& [brows, expected] : bad) {
+    const std::string error = parse_error(eye_with(R"("eyelids": {}, "face": { "brows": )" + brows + " }"));
+    EXPECT_EQ(error.find("scene.json: " + expected), 0u) << brows << "\n  message: " << error;
+  }
+}
+
 TEST(SceneFile, ReadsTheTissueTexturesAndWritesThemBackOnlyWhenOn) {
   const Scene scene = parse_scene(
       eye_with(R"("appearance": { "skin_texture_contrast": 0.3, "sclera_vessel_contrast": 0.45 })"), "s.json");

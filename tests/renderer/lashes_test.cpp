@@ -22,7 +22,7 @@ namespace {
 constexpr double kDegree = std::numbers::pi / 180;
 
 // One capsule along +z from the origin, 10 mm long, radius 0.5.
-PlacedLashes one_capsule() { return PlacedLashes(0, {{Point3{0, 0, 0}, Point3{0, 0, 10}, 0.5}}); }
+PlacedHairs one_capsule() { return PlacedHairs(Surface::lash, 0, {{Point3{0, 0, 0}, Point3{0, 0, 10}, 0.5}}); }
 
 Lane lane_from(const Point3& origin, const Vector3& direction, double t_lo = 0, double t_hi = INFINITY) {
   Lane lane;
@@ -34,7 +34,7 @@ Lane lane_from(const Point3& origin, const Vector3& direction, double t_lo = 0, 
 }
 
 TEST(Lashes, ACapsuleIsMetWhereItsClosedFormSays) {
-  const PlacedLashes capsule = one_capsule();
+  const PlacedHairs capsule = one_capsule();
   double t = 0;
   // Across the side, 0.3 mm off the axis: it enters at x = sqrt(0.5^2 -
   // 0.3^2) = 0.4, where the normal is (0.8, 0.6, 0).
@@ -97,12 +97,12 @@ TEST(Lashes, AMarginGrowsItsLashesByTheRules) {
   lashes.upper_curl_deg = 60;
   lashes.lower_curl_deg = 90;
   lashes.root_deg = 20;
-  const std::vector<LashSegment> upper = build_lashes(lashes, straight_edge(), true, 0);
+  const std::vector<HairSegment> upper = build_lashes(lashes, straight_edge(), true, 0);
   // The lashed part: u from -0.97 to 0.6 of 15 mm, 23.55 mm: 94 lashes.
   ASSERT_EQ(upper.size(), 94u * kLashSegments);
   const double r0 = 0.5 * lashes.thickness_mm;
   for (std::size_t k = 0; k < upper.size(); k += kLashSegments) {
-    const LashSegment& root = upper[k];
+    const HairSegment& root = upper[k];
     // Rooted on the lashed part of the edge, sunk by its radius.
     EXPECT_GE(root.a.x, -0.97 * 15 - 1e-9);
     EXPECT_LE(root.a.x, 0.6 * 15 + 1e-9);
@@ -110,7 +110,7 @@ TEST(Lashes, AMarginGrowsItsLashesByTheRules) {
     EXPECT_NEAR(root.a.z, -r0, 1e-12);
     double length = 0;
     for (int j = 0; j < kLashSegments; ++j) {
-      const LashSegment& s = upper[k + j];
+      const HairSegment& s = upper[k + j];
       if (j > 0) {
         EXPECT_EQ(s.a, upper[k + j - 1].b);  // a chain
       }
@@ -132,14 +132,14 @@ TEST(Lashes, AMarginGrowsItsLashesByTheRules) {
   // A lower lid's edge rises toward -y: bent by 90 +- 18 deg, its lashes
   // end below their roots (their chords' angles from the normal run from
   // -19 deg to 41 deg at the least).
-  const std::vector<LashSegment> lower = build_lashes(lashes, straight_edge(-1), false, 1);
+  const std::vector<HairSegment> lower = build_lashes(lashes, straight_edge(-1), false, 1);
   ASSERT_EQ(lower.size(), static_cast<std::size_t>(std::lround(lashes.lower_per_mm * 23.55)) * kLashSegments);
   for (std::size_t k = 0; k < lower.size(); k += kLashSegments) {
-    const LashSegment& tip = lower[k + kLashSegments - 1];
+    const HairSegment& tip = lower[k + kLashSegments - 1];
     EXPECT_LT(tip.b.y - lower[k].a.y, 0);
   }
   // Seeded: the same seed and stream, the same lashes; another seed, others.
-  const std::vector<LashSegment> again = build_lashes(lashes, straight_edge(), true, 0);
+  const std::vector<HairSegment> again = build_lashes(lashes, straight_edge(), true, 0);
   EXPECT_EQ(again.back().b, upper.back().b);
   lashes.seed = 2;
   EXPECT_NE(build_lashes(lashes, straight_edge(), true, 0).back().b, upper.back().b);
@@ -203,7 +203,7 @@ TEST(Lashes, AFacesLashesStandAboveItsMarginsAndFollowTheLid) {
 // The fast mode's queries: seen through the lashes, or the lashes alone.
 TEST(Lashes, QueriesCanLookThroughTheLashesOrAtThemAlone) {
   const RayTracer tracer(lashed_face(0));
-  ASSERT_TRUE(tracer.has_lashes());
+  ASSERT_TRUE(tracer.has_hair());
   Ray ray;
   ray.direction = -UnitVector3::unit_z();
   Hit hit;
@@ -212,7 +212,7 @@ TEST(Lashes, QueriesCanLookThroughTheLashesOrAtThemAlone) {
     hit = tracer.intersect(ray);
   }
   ASSERT_EQ(hit.surface, Surface::lash);
-  const Hit behind = tracer.intersect_except_lashes(ray);
+  const Hit behind = tracer.intersect_except_hair(ray);
   EXPECT_EQ(behind.surface, Surface::skin);
   EXPECT_GT(behind.t, hit.t);
   // A segment from in front of the lash to just in front of the skin
@@ -220,18 +220,18 @@ TEST(Lashes, QueriesCanLookThroughTheLashesOrAtThemAlone) {
   const Point3 front = ray.origin;
   const Point3 near_skin = behind.point + Vector3{0, 0, 0.01};
   EXPECT_TRUE(tracer.occluded(front, near_skin));
-  EXPECT_TRUE(tracer.occluded_by_lashes(front, near_skin));
-  EXPECT_FALSE(tracer.occluded_except_lashes(front, near_skin));
+  EXPECT_TRUE(tracer.occluded_by_hair(front, near_skin));
+  EXPECT_FALSE(tracer.occluded_except_hair(front, near_skin));
   // Through the skin as well: blocked with or without the lashes.
-  EXPECT_TRUE(tracer.occluded_except_lashes(front, behind.point - Vector3{0, 0, 1}));
+  EXPECT_TRUE(tracer.occluded_except_hair(front, behind.point - Vector3{0, 0, 1}));
   // Without lashes nothing is a lash.
   Scene bare = lashed_face(0);
   EyeAppearance look = bare.eyes[0].appearance();
   look.face->lashes.reset();
   bare.eyes[0].set_appearance(look);
   const RayTracer plain(bare);
-  EXPECT_FALSE(plain.has_lashes());
-  EXPECT_FALSE(plain.occluded_by_lashes(front, near_skin));
+  EXPECT_FALSE(plain.has_hair());
+  EXPECT_FALSE(plain.occluded_by_hair(front, near_skin));
   EXPECT_EQ(plain.intersect(ray).surface, Surface::skin);
 }
 

@@ -94,14 +94,19 @@ struct Lashes {
   std::uint64_t seed = 1;
 };
 
-// Lashes' numbers by their names in scene files ("lashes": {...}) and, with
-// "lash_" before them, in data sets; bounds as FaceKey's.
-struct LashKey {
+// A hair group's number by its name in scene files, with its bounds (as
+// FaceKey's).
+template <class Hairs>
+struct HairKey {
   std::string_view name;
-  double Lashes::*member;
+  double Hairs::*member;
   double low;
   double high;
 };
+
+// Lashes' numbers by their names in scene files ("lashes": {...}) and, with
+// "lash_" before them, in data sets.
+using LashKey = HairKey<Lashes>;
 inline constexpr std::array<LashKey, 9> kLashKeys{{
     {"upper_per_mm", &Lashes::upper_per_mm, 0, 10},
     {"lower_per_mm", &Lashes::lower_per_mm, 0, 10},
@@ -115,6 +120,48 @@ inline constexpr std::array<LashKey, 9> kLashKeys{{
     {"root_deg", &Lashes::root_deg, -45, 40},
     {"thickness_mm", &Lashes::thickness_mm, 0.02, 0.3},
     {"albedo", &Lashes::albedo, 0, 1},
+}};
+
+// Eyebrows on a face (docs/scene-format.md: brows): hairs rooted in a band
+// on the brow ridge that runs from above the medial canthus (the brow's
+// head) to past the lateral canthus (its tail), arching up over its
+// lateral half and narrowing toward the tail. They lie nearly flat: each
+// leaves the skin lift_deg above it and bends back toward it by curl_deg
+// in all; at the head they point up, along the body laterally (the
+// band's lower hairs tipped up and its upper ones down, so that they meet
+// along its middle), at the tail laterally and down; each is jittered in
+// place, length, direction and curl by a stream of `seed`. Defaults from
+// adult anthropometry, rounded: a brow's lower edge about 16 mm above the
+// pupil at its head, its arch some 2.5 mm higher above the lateral
+// limbus, its tail about 14 mm lateral to the lateral canthus; 10 mm tall
+// at the head; 250-600 hairs a brow (1.5 per mm^2 here) of 6-10 mm and
+// 0.05-0.1 mm thick. Albedo: a guess, as the lashes' (a little lighter:
+// brow hairs are finer and less pigmented than lashes).
+struct Brows {
+  double hairs_per_mm2 = 1.5;
+  double height_mm = 16;        // the band's lower edge at its head, above the centre of rotation
+  double width_mm = 10;         // the band's height at its head; 0.4 of it at the tail
+  double hair_length_mm = 8;
+  double thickness_mm = 0.08;   // diameter at the root; a third of it at the tip
+  double lift_deg = 20;         // at the root, above the skin
+  double curl_deg = 20;         // toward the skin, root to tip (no further than onto it)
+  double albedo = 0.15;
+  std::uint64_t seed = 1;
+};
+
+// Brows' numbers by their names in scene files ("brows": {...}) and, with
+// "brows_" before them, in data sets ("brow_" begins a face key).
+using BrowKey = HairKey<Brows>;
+inline constexpr std::array<BrowKey, 8> kBrowKeys{{
+    {"hairs_per_mm2", &Brows::hairs_per_mm2, 0, 6},
+    {"height_mm", &Brows::height_mm, 8, 30},
+    {"width_mm", &Brows::width_mm, 2, 15},
+    {"hair_length_mm", &Brows::hair_length_mm, 2, 15},
+    {"thickness_mm", &Brows::thickness_mm, 0.02, 0.2},
+    // A hair curled past the skin's plane lies on it from there on.
+    {"lift_deg", &Brows::lift_deg, 5, 60},
+    {"curl_deg", &Brows::curl_deg, 0, 60},
+    {"albedo", &Brows::albedo, 0, 1},
 }};
 
 // The periocular region as a face (docs/scene-format.md: face): in place
@@ -149,6 +196,8 @@ struct Face {
   double midline_mm = 31.5;
   // Absent: no lashes.
   std::optional<Lashes> lashes;
+  // Absent: no brows.
+  std::optional<Brows> brows;
 };
 
 // Face's lengths and angles by their names in scene files and data sets,

@@ -22,7 +22,7 @@ struct Ellipse {
 // What hides a point (status occluded): the lids and the skin around
 // them, an eyelash, one of the scene's meshes (glasses, occluders), or an
 // eye's own surfaces met off the point's path (a sclera, an iris).
-enum class Occluder { none, skin, lash, mesh, eye };
+enum class Occluder { none, skin, lash, brow, mesh, eye };
 const char* to_string(Occluder o);
 
 struct GlintTruth {

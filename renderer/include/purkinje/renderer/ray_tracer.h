@@ -13,8 +13,8 @@
 // (a sphere about the centre of rotation, minus the palpebral opening) and
 // the skin around them (a plane facing forward with a hole for the lids,
 // and the rest of the lid sphere behind it as the eye's socket), or the
-// face's mesh in their place with its lashes (chains of capsules, one
-// user primitive each, also intersected in double precision). Each of
+// face's mesh in their place with its lashes and brows (chains of
+// capsules, one user primitive each, also intersected in double precision). Each of
 // the scene's meshes is an Embree triangle geometry whose hits are
 // recomputed in double precision from the mesh's own vertices.
 // Geometry is documented in src/scene_geometry.h, precision in
@@ -41,6 +41,7 @@ enum class Surface : unsigned char {
   cornea_posterior,
   mesh,      // a triangle of one of the scene's meshes
   lash,      // one of an eye's eyelashes
+  brow,      // a hair of one of an eye's brows
   spectacle_lens,  // a surface of one of the scene's spectacle lenses (front, back or edge)
 };
 const char* to_string(Surface s);
@@ -57,11 +58,11 @@ struct Hit {
   int eye = -1;             // index into scene.eyes (-1 for Surface::mesh)
   int mesh = -1;            // index into scene.meshes (Surface::mesh only)
   int lens = -1;            // index into scene.spectacle_lenses (Surface::spectacle_lens only)
-  int triangle = -1;        // index into that mesh's (or face's) triangles, or the lashes' capsules
+  int triangle = -1;        // index into that mesh's (or face's) triangles, or the hairs' capsules
   double t = 0;             // distance along the ray, mm
   Point3 point;             // world, recomputed in double precision
   // Outward: out of the eye; toward the front for skin and iris; for a
-  // mesh, the triangle's front, (v1 - v0) x (v2 - v0); out of a lash; out
+  // mesh, the triangle's front, (v1 - v0) x (v2 - v0); out of a hair; out
   // of a spectacle lens's glass.
   UnitVector3 normal = UnitVector3::unit_z();
   bool front_face = true;   // the ray meets the side `normal` points to
@@ -124,15 +125,15 @@ class RayTracer {
   // nothing blocks the segment.
   Surface occluder_except_cornea(const Point3& from, const Point3& to) const;
 
-  // Lashes: thin and many, they are left to the samples by the fast
-  // mode's screen-space caches, which interpolate the rest.
-  bool has_lashes() const;
-  // As intersect() and occluded(), ignoring the lashes.
-  Hit intersect_except_lashes(const Ray& ray) const;
-  bool occluded_except_lashes(const Point3& from, const Point3& to) const;
-  // Whether a lash lies on the segment (as occluded() trims it), tested
-  // against the lashes alone.
-  bool occluded_by_lashes(const Point3& from, const Point3& to) const;
+  // Hairs (lashes and brows): thin and many, they are left to the samples
+  // by the fast mode's screen-space caches, which interpolate the rest.
+  bool has_hair() const;
+  // As intersect() and occluded(), ignoring the hairs.
+  Hit intersect_except_hair(const Ray& ray) const;
+  bool occluded_except_hair(const Point3& from, const Point3& to) const;
+  // Whether a hair lies on the segment (as occluded() trims it), tested
+  // against the hairs alone.
+  bool occluded_by_hair(const Point3& from, const Point3& to) const;
 
  private:
   struct Impl;

@@ -105,7 +105,7 @@ int edge_samples_per_pixel(const RenderOptions& options);
 // Pixel classes of the segmentation AOV ("id"): the first diffuse surface
 // seen through the cornea where the ray passes it; per pixel, the class
 // most of its samples see.
-enum class PixelClass : int { background = 0, skin = 1, sclera = 2, iris = 3, pupil = 4, lash = 5 };
+enum class PixelClass : int { background = 0, skin = 1, sclera = 2, iris = 3, pupil = 4, lash = 5, brow = 6 };
 
 struct GlintImage {
   int eye = 0;

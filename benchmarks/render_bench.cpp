@@ -33,15 +33,23 @@ namespace {
 // A bundled scene by name; "<name>+face": that scene's one eye given a
 // periocular face with every default (the face's cost on the same view);
 // "<name>+face+lashes": and default lashes; "<name>-lenses": without its
-// spectacle lenses (the lenses' cost on the same view).
+// spectacle lenses (the lenses' cost on the same view); "<name>-brows":
+// its faces without their brows (the brows' cost).
 const Scene& scene(const std::string& name) {
   static std::map<std::string, Scene> scenes;
   auto it = scenes.find(name);
   if (it == scenes.end()) {
-    const std::size_t plus = std::min(name.find("+face"), name.find("-lenses"));
+    const std::size_t plus = std::min({name.find("+face"), name.find("-lenses"), name.find("-brows")});
     const bool lashes = name.ends_with("+lashes");
     Scene s = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/" + name.substr(0, plus) + ".json");
     if (name.ends_with("-lenses")) s.spectacle_lenses.clear();
+    if (name.ends_with("-brows")) {
+      for (Eye& eye : s.eyes) {
+        EyeAppearance a = eye.appearance();
+        if (a.face) a.face->brows.reset();
+        eye.set_appearance(a);
+      }
+    }
     if (name.find("+face") != std::string::npos) {
       if (s.eyes.size() != 1) throw std::invalid_argument(name + ": a default face is a right eye's; one eye only");
       for (Eye& eye : s.eyes) {
@@ -175,6 +183,7 @@ void BM_RenderRemoteFaceLashesPairs(benchmark::State& s) { render_pairs(s, "remo
 void BM_RenderHeadsetFaceLashesPairs(benchmark::State& s) { render_pairs(s, "headset+face+lashes"); }
 // Both eyes in a 1280 x 960 view of the whole face.
 void BM_RenderRemoteBothEyesPairs(benchmark::State& s) { render_pairs(s, "remote_face"); }
+void BM_RenderRemoteBothEyesNoBrowsPairs(benchmark::State& s) { render_pairs(s, "remote_face-brows"); }
 void BM_RenderRemoteGlassesPairs(benchmark::State& s) { render_pairs(s, "remote_glasses"); }
 void BM_RenderRemoteGlassesFramePairs(benchmark::State& s) { render_pairs(s, "remote_glasses-lenses"); }
 BENCHMARK(BM_RenderRemote)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -190,6 +199,7 @@ BENCHMARK(BM_RenderHeadsetFaceLashes)->Args({1, 10})->Args({1, 16})->Unit(benchm
 BENCHMARK(BM_RenderRemoteFaceLashesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadsetFaceLashesPairs)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteBothEyesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemoteBothEyesNoBrowsPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteGlassesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteGlassesFramePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 // The brute-force mode at the same settings, for the side-by-side table

@@ -101,6 +101,8 @@ const std::vector<ParameterRule>& scene_rules() {
       {"iris_seed", T::integer, 0, kMaxExactInteger},
       {"iris_texture_contrast", T::real, 0, 1},
       {"iris_albedo", T::real, 0, 1},
+      {"iris_furrow_contrast", T::real, 0, 1},
+      {"iris_freckles", T::integer, 0, 20},
       {"sclera_albedo", T::real, 0, 1},
       {"skin_albedo", T::real, 0, 1},
       {"fundus_reflectance", T::real, 0, 1},
@@ -762,6 +764,8 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (auto v = value("iris_seed")) look.iris_seed = static_cast<std::uint64_t>(*v);
   if (auto v = value("iris_texture_contrast")) look.iris_texture_contrast = *v;
   if (auto v = value("iris_albedo")) look.iris_albedo = *v;
+  if (auto v = value("iris_furrow_contrast")) look.iris_furrow_contrast = *v;
+  if (auto v = value("iris_freckles")) look.iris_freckles = static_cast<int>(*v);
   if (auto v = value("sclera_albedo")) look.sclera_albedo = *v;
   if (auto v = value("skin_albedo")) look.skin_albedo = *v;
   if (auto v = value("fundus_reflectance")) look.fundus_reflectance = *v;

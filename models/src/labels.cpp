@@ -166,6 +166,8 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   }
   look["face"] = face;
   // The textures and the tear film only when on (as in scene files).
+  if (a.iris_furrow_contrast != 0) look["iris_furrow_contrast"] = number(a.iris_furrow_contrast);
+  if (a.iris_freckles != 0) look["iris_freckles"] = a.iris_freckles;
   if (a.skin_texture_contrast != 0) look["skin_texture_contrast"] = number(a.skin_texture_contrast);
   if (a.sclera_vessel_contrast != 0) look["sclera_vessel_contrast"] = number(a.sclera_vessel_contrast);
   if (a.tear_film) {

@@ -539,6 +539,11 @@ EyeAppearance read_appearance(Object& e) {
     a.iris_albedo = o->within_or("iris_albedo", 0, 1, a.iris_albedo);
     a.iris_texture_contrast = o->within_or("iris_texture_contrast", 0, 1, a.iris_texture_contrast);
     if (auto seed = o->optional("iris_seed")) a.iris_seed = seed->as_exact_count();
+    a.iris_furrow_contrast = o->within_or("iris_furrow_contrast", 0, 1, a.iris_furrow_contrast);
+    if (auto freckles = o->optional("iris_freckles")) {
+      a.iris_freckles = freckles->as_int();
+      if (a.iris_freckles < 0 || a.iris_freckles > 20) freckles->fail("must be between 0 and 20");
+    }
     a.sclera_albedo = o->within_or("sclera_albedo", 0, 1, a.sclera_albedo);
     a.skin_albedo = o->within_or("skin_albedo", 0, 1, a.skin_albedo);
     a.fundus_reflectance = o->within_or("fundus_reflectance", 0, 1, a.fundus_reflectance);
@@ -901,6 +906,8 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
                      {"skin_albedo", a.skin_albedo},
                      {"fundus_reflectance", a.fundus_reflectance}};
   // The textures only when on (every older scene's dump keeps its bytes).
+  if (a.iris_furrow_contrast != 0) o["appearance"]["iris_furrow_contrast"] = a.iris_furrow_contrast;
+  if (a.iris_freckles != 0) o["appearance"]["iris_freckles"] = a.iris_freckles;
   if (a.skin_texture_contrast != 0) o["appearance"]["skin_texture_contrast"] = a.skin_texture_contrast;
   if (a.sclera_vessel_contrast != 0) o["appearance"]["sclera_vessel_contrast"] = a.sclera_vessel_contrast;
   if (a.tear_film) {

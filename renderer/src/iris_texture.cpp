@@ -100,7 +100,7 @@ double value_noise(const Lattice& lattice, double u, int periods) {
 }
 
 // Texture layers (see iris_albedo).
-enum Layer : std::uint64_t { kFibres = 1, kFineFibres, kWaviness, kCrypts, kCollarette };
+enum Layer : std::uint64_t { kFibres = 1, kFineFibres, kWaviness, kCrypts, kCollarette, kFurrows, kFreckles };
 
 // Crypts: at most one per cell of kCryptCells per turn by kCryptRows over
 // rho, a radially elongated lozenge reaching at most into the next row (so
@@ -133,6 +133,48 @@ double crypt_darkening(const Lattice& lattice, double turn, double rho) {
                   crypt_in_cell(lattice, column, other, su - cu, sv));
 }
 
+// Contraction furrows: kFurrowCount circular folds over the outer third
+// (rho 0.62 to 0.92, 0.1 apart), each wavy by up to +-0.015 and of 1/e
+// half-width 0.0125 in rho, broken: shown where a slow noise along its
+// turn (9 cells a turn) is positive, fading in over its first quarter.
+// The darkening's largest value over the furrows, 0 to 1.
+constexpr int kFurrowCount = 4;
+double furrow_darkening(const Lattice& lattice, double turn, double rho) {
+  double darkest = 0;
+  for (int f = 0; f < kFurrowCount; ++f) {
+    const double row = 4.0 * f + 0.5;  // each furrow its own lattice rows
+    const double middle = 0.62 + 0.1 * f + 0.015 * value_noise(lattice, turn, 16, row);
+    const double x = (rho - middle) * (1.0 / 0.0125);
+    if (std::abs(x) > 3) continue;
+    const double shown = value_noise(lattice, turn, 9, row + 2);
+    if (shown <= 0) continue;
+    darkest = std::max(darkest, std::exp(-x * x) * smooth(std::min(4 * shown, 1.0)));
+  }
+  return darkest;
+}
+
+// Freckles: `count` round spots at turns and rho (0.25 to 0.95) drawn per
+// spot from the seed, 0.1 to 0.3 mm across, each 0.4 to 0.7 of the mean
+// darker at its middle with a soft edge. `r_mm` is the point's distance
+// from the pupil centre and `span_mm` the iris's width along its ray: the
+// spot is round in millimetres. The darkening's largest value, 0 to 0.7.
+double freckle_darkening(const Lattice& lattice, int count, double turn, double rho, double r_mm,
+                         double span_mm) {
+  double darkest = 0;
+  for (int k = 0; k < count; ++k) {
+    const std::uint64_t h = lattice.at(k, 0);
+    const auto part = [h](int i) { return static_cast<double>((h >> (12 * i)) & 0xfff) * (1.0 / 4095); };
+    double d_turn = turn - part(0);
+    d_turn -= std::round(d_turn);
+    const double along = d_turn * kTwoPi * r_mm, across = (rho - (0.25 + 0.7 * part(1))) * span_mm;
+    const double radius = 0.05 + 0.1 * part(2);
+    const double d2 = (along * along + across * across) / (radius * radius);
+    if (d2 >= 1) continue;
+    darkest = std::max(darkest, (0.4 + 0.3 * part(3)) * (1 - smooth(std::sqrt(d2))));
+  }
+  return darkest;
+}
+
 // Amplitudes of the texture's parts, as fractions of the mean albedo at
 // contrast 1.
 constexpr double kFibreAmplitude = 1.2;
@@ -140,6 +182,7 @@ constexpr double kCryptAmplitude = 0.8;
 constexpr double kCollaretteAmplitude = 0.5;
 constexpr double kRuffAmplitude = 0.9;
 constexpr double kLimbalAmplitude = 0.55;
+constexpr double kFurrowAmplitude = 0.8;  // at iris_furrow_contrast 1
 // The area-weighted mean of the darkening parts above (measured over
 // seeds, for pupils of 1.5 to 3 mm in a 5.5 mm iris), added back so that
 // the iris' mean is the requested albedo.
@@ -151,11 +194,16 @@ double iris_albedo(const EyeModel& model, const EyeAppearance& appearance, doubl
   const double mean = appearance.iris_albedo;
   const double contrast = appearance.iris_texture_contrast;
   const double flat = std::isfinite(mean) ? std::clamp(mean, 0.0, 1.0) : 0.0;
-  if (contrast == 0 || !std::isfinite(x_mm) || !std::isfinite(y_mm) || !std::isfinite(contrast)) {
+  const double furrows = appearance.iris_furrow_contrast;
+  const int freckles = std::clamp(appearance.iris_freckles, 0, 20);
+  const bool varied = (furrows > 0 && std::isfinite(furrows)) || freckles > 0;
+  if ((contrast == 0 && !varied) || !std::isfinite(x_mm) || !std::isfinite(y_mm) || !std::isfinite(contrast)) {
     return flat;
   }
-  const auto albedo_of = [&](double texture) {
-    const double a = mean * (1.0 + contrast * (texture + kMeanDarkening));
+  // Furrows and freckles darken by their own contrasts, the rest by the
+  // texture's.
+  const auto albedo_of = [&](double texture, double variety = 0) {
+    const double a = mean * (1.0 + contrast * (texture + kMeanDarkening) - variety);
     return std::isfinite(a) ? std::clamp(a, 0.0, 1.0) : flat;
   };
   // Beyond the iris, out to the sclera: the limbal ring's darkest value.
@@ -198,7 +246,14 @@ double iris_albedo(const EyeModel& model, const EyeAppearance& appearance, doubl
                          kCryptAmplitude * crypt_darkening(Lattice(seed, kCrypts), turn, rho) -
                          kCollaretteAmplitude * collarette - kRuffAmplitude * ruff -
                          kLimbalAmplitude * limbal;
-  return albedo_of(texture);
+  double variety = 0;
+  if (furrows > 0 && std::isfinite(furrows)) {
+    variety += kFurrowAmplitude * furrows * furrow_darkening(Lattice(seed, kFurrows), turn, rho);
+  }
+  if (freckles > 0) {
+    variety += freckle_darkening(Lattice(seed, kFreckles), freckles, turn, rho, from_centre, span);
+  }
+  return albedo_of(texture, variety);
 }
 
 }  // namespace purkinje::renderer

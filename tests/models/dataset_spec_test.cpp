@@ -418,6 +418,18 @@ TEST(DatasetSpec, TheTissueTexturesReachTheFirstEye) {
   }
 }
 
+TEST(DatasetSpec, TheIrisFurrowsAndFrecklesReachTheFirstEye) {
+  const DatasetSpec spec = spec_with(R"("parameters": {"iris_furrow_contrast": {"uniform": [0, 1]},
+      "iris_freckles": {"choice": [0, 7, 20]}})");
+  for (std::uint64_t k : {0u, 3u, 5u}) {
+    const ImageDraw d = draw_image(spec, k);
+    const Scene scene = scene_for_image(spec, d);
+    const EyeAppearance& a = scene.eyes[0].appearance();
+    EXPECT_EQ(a.iris_furrow_contrast, column(spec, d, "iris_furrow_contrast"));
+    EXPECT_EQ(a.iris_freckles, column(spec, d, "iris_freckles"));
+  }
+}
+
 TEST(DatasetSpec, ADrawNoEyeCanHaveIsNamedWithItsImageAndValues) {
   // A pupil of 6 mm in an iris of 5.9: the anatomy rule, at image 0.
   const DatasetSpec spec = spec_with(R"("parameters": {"pupil_radius_mm": {"uniform": [5.95, 6]}})");

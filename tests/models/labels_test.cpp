@@ -215,6 +215,20 @@ TEST(Labels, TheEyesBrowsAreWrittenAsTheSceneGivesThem) {
   EXPECT_TRUE(face["lashes"].is_null());
 }
 
+TEST(Labels, TheIrisFurrowsAndFrecklesAreWrittenOnlyWhenOn) {
+  Scene scene = two_light_scene();
+  const json plain = json::parse(truth_to_json(scene, hand_made_truth()))["eyes"][0]["appearance"];
+  EXPECT_FALSE(plain.contains("iris_furrow_contrast"));
+  EXPECT_FALSE(plain.contains("iris_freckles"));
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.iris_furrow_contrast = 0.6;
+  look.iris_freckles = 4;
+  scene.eyes[0].set_appearance(look);
+  const json on = json::parse(truth_to_json(scene, hand_made_truth()))["eyes"][0]["appearance"];
+  EXPECT_EQ(on["iris_furrow_contrast"].get<double>(), 0.6);
+  EXPECT_EQ(on["iris_freckles"].get<int>(), 4);
+}
+
 TEST(Labels, CsvHasOneRowPerFeatureAndEmptyCellsForMissingValues) {
   const std::string text = truth_to_csv(two_light_scene(), hand_made_truth());
   EXPECT_FALSE(mentions_non_finite(text)) << text;

@@ -716,6 +716,28 @@ TEST(SceneFile, ReadsTheTissueTexturesAndWritesThemBackOnlyWhenOn) {
             0u);
 }
 
+TEST(SceneFile, ReadsTheIrisFurrowsAndFrecklesAndWritesThemBackOnlyWhenOn) {
+  const Scene scene =
+      parse_scene(eye_with(R"("appearance": { "iris_furrow_contrast": 0.7, "iris_freckles": 12 })"), "s.json");
+  EXPECT_EQ(scene.eyes[0].appearance().iris_furrow_contrast, 0.7);
+  EXPECT_EQ(scene.eyes[0].appearance().iris_freckles, 12);
+  const Scene back = parse_scene(scene_to_json(scene), "back.json");
+  EXPECT_EQ(back.eyes[0].appearance().iris_furrow_contrast, 0.7);
+  EXPECT_EQ(back.eyes[0].appearance().iris_freckles, 12);
+  const Scene plain = parse_scene(eye_with(R"("appearance": {})"), "s.json");
+  EXPECT_EQ(scene_to_json(plain).find("furrow"), std::string::npos);
+  EXPECT_EQ(scene_to_json(plain).find("freckles"), std::string::npos);
+  const std::map<std::string, std::string> bad = {
+      {R"({ "iris_furrow_contrast": 2 })", "eyes[0].appearance.iris_furrow_contrast = 2: must be between 0 and 1"},
+      {R"({ "iris_freckles": 21 })", "eyes[0].appearance.iris_freckles = 21: must be between 0 and 20"},
+      {R"({ "iris_freckles": 2.5 })", "eyes[0].appearance.iris_freckles = 2.5: must be an integer"},
+  };
+  for (const auto& [appearance, expected] : bad) {
+    const std::string error = parse_error(eye_with(R"("appearance": )" + appearance));
+    EXPECT_EQ(error.find("scene.json: " + expected), 0u) << appearance << "\n  message: " << error;
+  }
+}
+
 TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
   const Scene scene = parse_scene(
       eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5, "meniscus_radius_mm": 0.25 } })"),

@@ -13,6 +13,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <vector>
+#include <utility>
 
 #include "purkinje/models/eye.h"
 #include "purkinje/models/specular.h"
@@ -719,6 +720,114 @@ TEST(IrisAlbedo, RingsAreDarker) {
   const double beyond = iris_albedo(m, a, 5.8, 0.3);
   EXPECT_LT(beyond, 0.8 * 0.3);
   EXPECT_EQ(beyond, iris_albedo(m, a, -0.2, -6.5));
+}
+
+// Contraction furrows (iris_furrow_contrast, on a flat iris so that they
+// alone vary it): broken dark rings only over the outer third, at most
+// 0.8 of the mean darker; none at 0.
+TEST(IrisAlbedo, FurrowsAreBrokenDarkRingsOverTheOuterThird) {
+  const EyeModel m = navarro_eye();
+  EyeAppearance a;
+  a.iris_albedo = 0.3;
+  a.iris_texture_contrast = 0;
+  a.iris_furrow_contrast = 1;
+  const double pupil = m.pupil_radius_mm, span = m.iris_radius_mm - pupil;
+  ASSERT_EQ(m.pupil_decentration_x_mm, 0);
+  ASSERT_EQ(m.pupil_decentration_y_mm, 0);
+  const int n = 2000;
+  double darkest_ring = 1;
+  for (double rho = 0.02; rho < 0.99; rho += 0.005) {
+    double sum = 0, darkest = 1;
+    int dark = 0, untouched = 0;
+    for (int k = 0; k < n; ++k) {
+      const double angle = 2 * kPi * k / n, r = pupil + rho * span;
+      const double v = iris_albedo(m, a, r * std::cos(angle), r * std::sin(angle));
+      EXPECT_GE(v, 0.3 * (1 - 0.8) - 1e-12);
+      sum += v;
+      darkest = std::min(darkest, v);
+      dark += v < 0.3 * 0.7;
+      untouched += v == 0.3;
+    }
+    if (rho < 0.55) {
+      EXPECT_EQ(darkest, 0.3) << "a furrow inside the outer third, at rho " << rho;
+      continue;
+    }
+    darkest_ring = std::min(darkest_ring, sum / n);
+    // Broken: no ring is dark all round.
+    if (dark > 0) EXPECT_GT(untouched, n / 10) << "rho " << rho;
+  }
+  EXPECT_LT(darkest_ring, 0.3 * 0.85);
+  // The mean falls by the darkened area's share (scene-format.md: 4%).
+  const double mean = iris_stats(m, a).mean;
+  RecordProperty("mean_fall", std::to_string(1 - mean / 0.3));
+  EXPECT_LT(mean, 0.3 * 0.985);
+  EXPECT_GT(mean, 0.3 * 0.95);
+  a.iris_furrow_contrast = 0;
+  EXPECT_EQ(iris_albedo(m, a, 0, pupil + 0.72 * span), 0.3);
+}
+
+// Freckles (iris_freckles, on a flat iris): that many round dark spots
+// 0.1 to 0.3 mm across, 0.4 to 0.7 of the mean darker at their middles,
+// elsewhere with another seed; none at 0.
+TEST(IrisAlbedo, FrecklesAreThatManyRoundSpots) {
+  const EyeModel m = navarro_eye();
+  EyeAppearance a;
+  a.iris_albedo = 0.3;
+  a.iris_texture_contrast = 0;
+  a.iris_freckles = 6;
+  const double step = 0.01, extent = m.iris_radius_mm;
+  const int size = static_cast<int>(2 * extent / step) + 1;
+  std::vector<int> label(static_cast<std::size_t>(size) * size, 0);  // -1 dark, unlabelled; k > 0 spot k
+  const auto at = [&](int i, int j) -> int& { return label[static_cast<std::size_t>(j) * size + i]; };
+  double darkest = 1;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      const double v = iris_albedo(m, a, -extent + i * step, -extent + j * step);
+      darkest = std::min(darkest, v);
+      if (std::hypot(-extent + i * step, -extent + j * step) <= extent && v < 0.3 * 0.9) at(i, j) = -1;
+    }
+  }
+  EXPECT_LT(darkest, 0.3 * (1 - 0.4) + 0.01);
+  EXPECT_GE(darkest, 0.3 * (1 - 0.7) - 1e-12);
+  // Connected dark regions, each round: its extent across x and y alike,
+  // and no wider than 0.3 mm.
+  int spots = 0;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      if (at(i, j) != -1) continue;
+      ++spots;
+      int x0 = i, x1 = i, y0 = j, y1 = j;
+      std::vector<std::pair<int, int>> stack{{i, j}};
+      at(i, j) = spots;
+      while (!stack.empty()) {
+        const auto [u, v] = stack.back();
+        stack.pop_back();
+        x0 = std::min(x0, u), x1 = std::max(x1, u), y0 = std::min(y0, v), y1 = std::max(y1, v);
+        for (const auto [du, dv] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const int p = u + du, q = v + dv;
+          if (p < 0 || q < 0 || p >= size || q >= size || at(p, q) != -1) continue;
+          at(p, q) = spots;
+          stack.push_back({p, q});
+        }
+      }
+      const double w = (x1 - x0 + 1) * step, h = (y1 - y0 + 1) * step;
+      EXPECT_LT(std::max(w, h), 0.3 + 2 * step) << "spot " << spots;
+      EXPECT_LT(std::max(w, h) / std::min(w, h), 1.35) << "spot " << spots << ": " << w << " x " << h << " mm";
+    }
+  }
+  EXPECT_EQ(spots, 6);
+  // Another seed, other places.
+  EyeAppearance b = a;
+  b.iris_seed = 2;
+  int moved = 0;
+  for (int j = 0; j < size; j += 2) {
+    for (int i = 0; i < size; i += 2) {
+      if (at(i, j) > 0) moved += iris_albedo(m, b, -extent + i * step, -extent + j * step) >= 0.3 * 0.9;
+    }
+  }
+  EXPECT_GT(moved, 0);
+  a.iris_freckles = 0;
+  for (int k = 0; k < 50; ++k) EXPECT_EQ(iris_albedo(m, a, 3.5 * std::cos(k), 3.5 * std::sin(k)), 0.3);
 }
 
 }  // namespace

@@ -252,6 +252,13 @@ struct EyeAppearance {
   double iris_albedo = 0.25;           // mean of the textured iris
   double iris_texture_contrast = 0.5;  // 0: flat iris; 1: albedo varies by about +-100% of the mean
   std::uint64_t iris_seed = 1;         // the procedural texture's seed
+  // The iris's variety beyond its fibres, crypts and collarette, seeded by
+  // iris_seed (docs/scene-format.md: appearance): contraction furrows,
+  // broken dark rings over its outer third (0: none; 1: 0.8 of the mean
+  // darker at their middles), and this many pigment spots (iris
+  // freckles, 0 to 20). Both darken the iris by the area they cover.
+  double iris_furrow_contrast = 0.0;
+  int iris_freckles = 0;
   double sclera_albedo = 0.55;
   double skin_albedo = 0.45;
   // Low-contrast albedo textures, seeded by iris_seed (the eye's texture

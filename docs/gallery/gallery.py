@@ -1,7 +1,8 @@
 """The gallery of docs/rendering.md: the bundled scenes, twelve images
 drawn across the face's and the lashes' parameters, three of what a
 real camera adds (JPEG and hot pixels, vignetting, a saccade), one of
-the skin's and sclera's textures and two of wet eyes' highlights,
+the iris's furrows and freckles, one of dense brows, one of the skin's
+and sclera's textures and two of wet eyes' highlights,
 each with its labels
 drawn over it (purkinje.figures.draw_labels). Rendered in the fast mode as
 `purkinje render` does by default (1 ray, 16 on edges, sensor noise).
@@ -109,7 +110,17 @@ def entries():
     wet_headset["cameras"][0]["sensor"]["exposure_s"] = 0.0004  # the face's lit sclera saturates at 1 ms
     textured = with_face(load(h), gaze=(20, 5))
     textured["eyes"][0].setdefault("appearance", {}).update({"skin_texture_contrast": 0.3, "sclera_vessel_contrast": 0.5})
+    varied = with_face(load(h), gaze=(0, 5))
+    varied["eyes"][0].setdefault("appearance", {}).update({"iris_furrow_contrast": 1.0, "iris_freckles": 8,
+                                                          "iris_seed": 3})
+    browed = load("remote_face")
+    for eye, seed in zip(browed["eyes"], (1, 2)):
+        eye["face"]["brows"] = {"hairs_per_mm2": 3, "width_mm": 12, "thickness_mm": 0.1, "albedo": 0.06, "seed": seed}
     wet = [
+        ("headset_iris_variety", "headset with a face, an iris with contraction furrows (1) and 8 freckles",
+         varied, None),
+        ("remote_face_dense_brows", "remote_face with dense, wide, dark brows (3 hairs/mm^2, 12 mm, albedo 0.06)",
+         browed, 170),
         ("headset_textured", "headset with a face, the skin's albedo textured (wrinkles, pores, blotches; contrast "
          "0.3) and the sclera's vessels (0.5), looking 20 deg aside", textured, None),
         ("remote_wet", "remote with a face, wet eyes (tear film: 2 deg of roughness, a 0.3 mm lower meniscus), "

@@ -92,6 +92,7 @@ TEST(Brows, AFaceGrowsItsBrowsInTheBandOnItsSkin) {
   const double p = band.mean_keep();
   EXPECT_NEAR(static_cast<double>(hairs), drawn * p, 4 * std::sqrt(drawn * p * (1 - p)));
   EXPECT_GT(hairs, 250u);  // anthropometry: 250-600 a brow
+  RecordProperty("hairs", static_cast<int>(hairs));
 
   const RayTracer tracer(scene);
   const double r0 = 0.5 * brows.thickness_mm;

@@ -18,7 +18,7 @@ import numpy as np
 
 import purkinje
 
-CLASSES = ["background", "skin", "sclera", "iris", "pupil", "lash"]
+CLASSES = ["background", "skin", "sclera", "iris", "pupil", "lash", "brow"]
 
 
 def main():

@@ -99,10 +99,10 @@ const std::vector<ParameterRule>& scene_rules() {
       {"blink", T::boolean}},
       face_rules(), hair_rules("lash_", kLashKeys), hair_rules("brows_", kBrowKeys), std::vector<ParameterRule>{
       {"iris_seed", T::integer, 0, kMaxExactInteger},
-      {"iris_texture_contrast", T::real, 0, 1},
-      {"iris_albedo", T::real, 0, 1},
       {"iris_furrow_contrast", T::real, 0, 1},
       {"iris_freckles", T::integer, 0, 20},
+      {"iris_texture_contrast", T::real, 0, 1},
+      {"iris_albedo", T::real, 0, 1},
       {"sclera_albedo", T::real, 0, 1},
       {"skin_albedo", T::real, 0, 1},
       {"fundus_reflectance", T::real, 0, 1},

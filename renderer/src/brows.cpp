@@ -1,6 +1,7 @@
 #include "brows.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -13,7 +14,7 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180;
 constexpr double kTailPastCanthusMm = 14.0;
 constexpr double kArchMm = 2.5;
-constexpr double kArchAt = 0.65;        // fraction of the way from head to tail
+constexpr double kArchAt = 0.52;        // fraction of the way from head to tail: above the lateral limbus
 constexpr double kTaper = 0.6;          // the band's height falls by this share from head to tail
 constexpr double kCellMm = 1.0;         // the lookup grid's cells
 
@@ -110,7 +111,7 @@ class SkinAbove {
 }  // namespace
 
 std::vector<HairSegment> build_brows(const Brows& brows, const Eyelids& lids, const Face& face, const FaceMesh& mesh,
-                                     const Pose& world_from_head, std::uint64_t stream) {
+                                     const Pose& world_from_head, int eye) {
   std::vector<HairSegment> segments;
   const double n_head = lids.half_width_mm;
   const double n_tail = -face.lateral_canthus_mm - kTailPastCanthusMm;
@@ -126,11 +127,13 @@ std::vector<HairSegment> build_brows(const Brows& brows, const Eyelids& lids, co
     y_lo = std::min(y_lo, lower_edge(brows, s));
     y_hi = std::max(y_hi, lower_edge(brows, s) + band_height(brows, s));
   }
-  const double x_a = nasal * n_head, x_b = nasal * n_tail;
-  const SkinAbove skin(mesh, world_from_head, std::min(x_a, x_b) - kCellMm, std::max(x_a, x_b) + kCellMm,
-                       y_lo - kCellMm, y_hi + kCellMm);
+  // The skin under the band and under every hair's reach.
+  const double x_a = nasal * n_head, x_b = nasal * n_tail, reach = 1.2 * brows.hair_length_mm + kCellMm;
+  const SkinAbove skin(mesh, world_from_head, std::min(x_a, x_b) - reach, std::max(x_a, x_b) + reach, y_lo - reach,
+                       y_hi + reach);
   const Rotation& head = world_from_head.rotation();
-  const std::uint64_t key = stream_key(brows.seed, stream);
+  const Pose head_from_world = world_from_head.inverse();
+  const std::uint64_t key = stream_key(brows.seed, kBrowStreams + static_cast<std::uint64_t>(eye));
   const double root_radius = 0.5 * brows.thickness_mm;
   segments.reserve(static_cast<std::size_t>(count) * kBrowSegments);
 
@@ -154,15 +157,33 @@ std::vector<HairSegment> build_brows(const Brows& brows, const Eyelids& lids, co
     growth += (-20 - growth) * smoothstep(s, 0.75, 1.0);
     growth = (growth + 24 * (draw(2) - 0.5)) * kDeg;
     const Vector3 seen = head * Vector3{-nasal * std::cos(growth), std::sin(growth), 0};
-    const Vector3& normal = root->normal;
-    const auto along = UnitVector3::try_normalize(seen - normal * dot(normal, seen));
-    if (!along) continue;
     const double lift = (brows.lift_deg + 10 * (draw(3) - 0.5)) * kDeg;
-    const double curl = std::min(brows.curl_deg * kDeg * (1 + 0.6 * (draw(4) - 0.5)), lift);
-    const double hair_length = brows.hair_length_mm * (1 + 0.4 * (draw(5) - 0.5));
-    // From the normal toward the growth: 90 deg - lift at the root.
-    append_hair(segments, root->point, normal, along->vector(), cross(normal, along->vector()),
-                0.5 * std::numbers::pi - lift, curl, 0.0, hair_length, root_radius, kBrowSegments);
+    const double curl = brows.curl_deg * kDeg * (1 + 0.6 * (draw(4) - 0.5));
+    const double step = brows.hair_length_mm * (1 + 0.4 * (draw(5) - 0.5)) / kBrowSegments;
+    // Chord by chord along the skin: each leaves the tangent plane of the
+    // skin below its start (the root's, for the first) toward the growth,
+    // at the hair's elevation at its middle (lift at the root, falling by
+    // curl over the length, to no less than 0): the hair lies over the
+    // ridge's curve instead of leaving it along the root's plane.
+    std::array<HairSegment, kBrowSegments> hair;
+    Point3 a = root->point - root->normal * root_radius;  // sunk into the skin: no gap at the root
+    Vector3 normal = root->normal;
+    bool whole = true;
+    for (int j = 0; j < kBrowSegments && whole; ++j) {
+      const double mid = (j + 0.5) / kBrowSegments;
+      if (j > 0) {
+        const Point3 h = head_from_world * a;
+        if (const auto below = skin.at(h.x, h.y)) normal = below->normal;
+      }
+      const auto along = UnitVector3::try_normalize(seen - normal * dot(normal, seen));
+      whole = along.has_value();
+      if (!whole) break;
+      const double elevation = std::max(lift - curl * mid, 0.0);
+      const Point3 b = a + (along->vector() * std::cos(elevation) + normal * std::sin(elevation)) * step;
+      hair[static_cast<std::size_t>(j)] = {a, b, root_radius * (1 - 2.0 / 3.0 * mid)};
+      a = b;
+    }
+    if (whole) segments.insert(segments.end(), hair.begin(), hair.end());
   }
   return segments;
 }

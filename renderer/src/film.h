@@ -43,7 +43,7 @@ class PlanePool {
 // Why refinement() refines a pixel.
 enum class Refine : std::uint8_t { no = 0, texture, outline, strong_edge };
 
-// The segmentation's classes: background, skin, sclera, iris, pupil, lash.
+// The segmentation's classes: background, skin, sclera, iris, pupil, lash, brow.
 constexpr int kClasses = 7;
 
 class Film {
@@ -74,8 +74,8 @@ class Film {
   // The planes, handed over once the pixels are done: the radiance, the
   // diffuse electrons (before the optics), and the AOVs in their order
   // (depth, N.x, N.y, N.z, id, skin, sclera, iris, pupil, lash if
-  // `lashes`, cornea), the background's coverage (and the lashes' without
-  // them) going back to the pool.
+  // `lashes`, brow if `brows`, cornea), the background's coverage (and the
+  // lashes' and brows' without them) going back to the pool.
   ImagePlane take_radiance() { return std::move(radiance_); }
   // The fraction of each pixel's samples that saw a class first.
   const ImagePlane& coverage(PixelClass c) const { return coverage_[static_cast<int>(c)]; }

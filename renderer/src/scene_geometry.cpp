@@ -196,9 +196,7 @@ void add_face(SceneGeometry& geometry, const Scene& scene, int index, const Eye&
     if (!segments.empty()) geometry.hairs.push_back(std::make_unique<PlacedHairs>(Surface::lash, index, std::move(segments)));
   }
   if (const auto& brows = eye.appearance().face->brows) {
-    // Stream `index`: each eye its own draws (the seed is the brows' own).
-    std::vector<HairSegment> hairs =
-        build_brows(*brows, *eye.appearance().eyelids, *eye.appearance().face, face, H, static_cast<std::uint64_t>(index));
+    std::vector<HairSegment> hairs = build_brows(*brows, *eye.appearance().eyelids, *eye.appearance().face, face, H, index);
     if (!hairs.empty()) geometry.hairs.push_back(std::make_unique<PlacedHairs>(Surface::brow, index, std::move(hairs)));
   }
   geometry.meshes.push_back(std::make_unique<PlacedMesh>(index, std::move(face)));

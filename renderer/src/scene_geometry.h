@@ -111,7 +111,7 @@ struct Lane {
   double t_hi = 0;     // shrinks to the closest hit so far
   double t_shift = 0;  // the Embree ray starts at origin + t_shift direction
   // The closest hit so far, or the occluder: a surface, a mesh's triangle
-  // or a lash's capsule (at most one of the three set).
+  // or a hair's capsule (a lash's or a brow's; at most one of the three set).
   const PlacedSurface* surface = nullptr;
   const PlacedMesh* mesh = nullptr;
   const PlacedHairs* hairs = nullptr;

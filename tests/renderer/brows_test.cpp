@@ -58,7 +58,7 @@ struct Band {
   const Brows& brows;
   double head = Eyelids{}.half_width_mm;
   double tail = -Face{}.lateral_canthus_mm - 14;
-  double lower(double s) const { return brows.height_mm + 2.5 * (1 - std::pow((s - 0.65) / 0.65, 2)); }
+  double lower(double s) const { return brows.height_mm + 2.5 * (1 - std::pow((s - 0.52) / 0.52, 2)); }
   double height(double s) const { return brows.width_mm * (1 - 0.6 * s); }
   double s_at(double x) const { return (head - x) / (head - tail); }
   // The mean of the feathering's keep probability over the band's area.
@@ -97,6 +97,7 @@ TEST(Brows, AFaceGrowsItsBrowsInTheBandOnItsSkin) {
   const RayTracer tracer(scene);
   const double r0 = 0.5 * brows.thickness_mm;
   int head_hairs = 0, tail_hairs = 0;
+  double worst_gap = 0;
   double tail_down = 0, tail_lateral = 0;
   for (std::size_t k = 0; k < segments.size(); k += kBrowSegments) {
     const HairSegment& first = segments[k];
@@ -120,13 +121,24 @@ TEST(Brows, AFaceGrowsItsBrowsInTheBandOnItsSkin) {
     const double lift = std::asin(dot(chord, skin.normal.vector()) / chord.norm()) / kDegree;
     EXPECT_GE(lift, brows.lift_deg - 5 - 1.3 * brows.curl_deg / 8 - 1);
     EXPECT_LE(lift, brows.lift_deg + 5 + 1);
-    // Every chord's end in front of the skin (a hair curls at most back to
-    // the plane at its root, and the brow ridge is convex).
+    // Every chord's end in front of the skin, and the tip no higher above
+    // it (along the skin's normal) than its chords' rises at their largest
+    // elevations (lift + 5 deg less 0.7 of the curl to the chord's middle,
+    // chords of 1.2 times the hair's length over 4) allow, plus 0.3 mm for
+    // the ridge's curve under a chord.
+    double rise = 0;
     for (int j = 0; j < kBrowSegments; ++j) {
+      const double elevation = std::max(brows.lift_deg + 5 - 0.7 * brows.curl_deg * (j + 0.5) / kBrowSegments, 0.0);
+      rise += 1.2 * brows.hair_length_mm / kBrowSegments * std::sin(elevation * kDegree);
       const Point3& end = segments[k + j].b;
       down.origin = {end.x, end.y, 100};
       const Hit behind = tracer.intersect_except_hair(down);
       EXPECT_GT(end.z, behind.point.z - 1e-9) << "hair " << k / kBrowSegments << " chord " << j;
+      if (j == kBrowSegments - 1) {
+        const double gap = (end.z - behind.point.z) * std::abs(behind.normal.z());
+        EXPECT_LT(gap, rise + 0.3) << "hair " << k / kBrowSegments << " floats off the skin";
+        worst_gap = std::max(worst_gap, gap);
+      }
     }
     // Growth: up at the head; lateral (-x for a right eye) and down at the
     // tail, on average (there the skin turns back around the side of the
@@ -142,6 +154,7 @@ TEST(Brows, AFaceGrowsItsBrowsInTheBandOnItsSkin) {
       tail_lateral += -chord.x / chord.norm();
     }
   }
+  RecordProperty("worst_tip_gap_mm", std::to_string(worst_gap));
   EXPECT_GT(head_hairs, 0);
   ASSERT_GT(tail_hairs, 3);
   EXPECT_LT(tail_down / tail_hairs, -0.1);
@@ -170,6 +183,20 @@ TEST(Brows, SeededAndSparedWhereThereAreNone) {
   for (const HairSegment& s : mirrored) left_x += s.a.x;
   EXPECT_LT(right_x / one.size(), 0);  // the band reaches further laterally than nasally
   EXPECT_GT(left_x / mirrored.size(), 0);
+  // And grow mirrored: along the body and tail laterally, -x for the right
+  // eye and +x for the left, on average over the hairs rooted laterally.
+  const auto lateral_growth = [](const std::vector<HairSegment>& hairs, double side) {
+    double sum = 0;
+    int n = 0;
+    for (std::size_t k = 0; k < hairs.size(); k += kBrowSegments) {
+      if (side * hairs[k].a.x > -5) continue;  // medial: the head's hairs point up
+      sum += side * (hairs[k].b.x - hairs[k].a.x) / (hairs[k].b - hairs[k].a).norm();
+      ++n;
+    }
+    return n > 0 ? sum / n : 0.0;
+  };
+  EXPECT_LT(lateral_growth(one, 1), -0.5);
+  EXPECT_LT(lateral_growth(mirrored, -1), -0.5);
 }
 
 // The bundled remote_face (brows on both eyes): brow pixels are their own

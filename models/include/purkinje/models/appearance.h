@@ -127,7 +127,8 @@ inline constexpr std::array<LashKey, 9> kLashKeys{{
 // head) to past the lateral canthus (its tail), arching up over its
 // lateral half and narrowing toward the tail. They lie nearly flat: each
 // leaves the skin lift_deg above it and bends back toward it by curl_deg
-// in all; at the head they point up, along the body laterally (the
+// in all, following the skin's curve and lying on it once curled down to
+// it; at the head they point up, along the body laterally (the
 // band's lower hairs tipped up and its upper ones down, so that they meet
 // along its middle), at the tail laterally and down; each is jittered in
 // place, length, direction and curl by a stream of `seed`. Defaults from
@@ -144,7 +145,7 @@ struct Brows {
   double hair_length_mm = 8;
   double thickness_mm = 0.08;   // diameter at the root; a third of it at the tip
   double lift_deg = 20;         // at the root, above the skin
-  double curl_deg = 20;         // toward the skin, root to tip (no further than onto it)
+  double curl_deg = 20;         // toward the skin, root to tip (a hair curled down to it lies on it)
   double albedo = 0.15;
   std::uint64_t seed = 1;
 };
@@ -158,7 +159,6 @@ inline constexpr std::array<BrowKey, 8> kBrowKeys{{
     {"width_mm", &Brows::width_mm, 2, 15},
     {"hair_length_mm", &Brows::hair_length_mm, 2, 15},
     {"thickness_mm", &Brows::thickness_mm, 0.02, 0.2},
-    // A hair curled past the skin's plane lies on it from there on.
     {"lift_deg", &Brows::lift_deg, 5, 60},
     {"curl_deg", &Brows::curl_deg, 0, 60},
     {"albedo", &Brows::albedo, 0, 1},

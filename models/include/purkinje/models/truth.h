@@ -124,7 +124,7 @@ struct SceneTruth {
   std::vector<EyeInCameraTruth> views;  // camera-major: (camera 0, eye 0), (camera 0, eye 1), ...
 };
 
-// What of the scene as rendered (lids, skin, lashes, meshes; not the
+// What of the scene as rendered (lids, skin, lashes, brows, meshes; not the
 // cornea, whose paths the solver has already followed) blocks the straight
 // path between two points: the blocker nearest `to`, or Occluder::none.
 // The renderer's ray tracer supplies it.

@@ -24,6 +24,31 @@ double arc_at(const MarginEdge& edge, const std::vector<double>& arc, double u) 
   return arc[i] + w * (arc[i + 1] - arc[i]);
 }
 
+// One hair appended to `segments` as `count` capsules: from `root` (sunk
+// by its radius along -n, so that no gap shows) along n cos(angle) +
+// r sin(angle), turned toward t by `fan`, where the angle runs linearly
+// from `root_angle` to root_angle + curl over its length (an arc of
+// constant curvature cut into chords), its radius tapering from
+// root_radius to a third of it at the tip.
+void append_hair(std::vector<HairSegment>& segments, const Point3& root, const Vector3& n, const Vector3& r,
+                 const Vector3& t, double root_angle, double curl, double fan, double length, double root_radius,
+                 int count) {
+  // A chord of an arc of constant curvature: along the mean angle, its
+  // length the arc's times sinc(half the turn).
+  const double step = length / count;
+  const double turn = curl / count;
+  const double chord = std::abs(turn) > 1e-12 ? step * std::sin(0.5 * turn) / (0.5 * turn) : step;
+  Point3 a = root - n * root_radius;  // sunk into the skin: no gap at the root
+  for (int j = 0; j < count; ++j) {
+    const double mid = (j + 0.5) / count;
+    const double angle = root_angle + curl * mid;
+    const Vector3 direction = (n * std::cos(angle) + r * std::sin(angle)) * std::cos(fan) + t * std::sin(fan);
+    const Point3 b = a + direction * chord;
+    segments.push_back({a, b, root_radius * (1 - 2.0 / 3.0 * mid)});
+    a = b;
+  }
+}
+
 }  // namespace
 
 std::vector<HairSegment> build_lashes(const Lashes& lashes, const MarginEdge& edge, bool upper, std::uint64_t stream) {
@@ -66,25 +91,6 @@ std::vector<HairSegment> build_lashes(const Lashes& lashes, const MarginEdge& ed
     append_hair(segments, root, n, r, t, -tilt, curl, fan, length, root_radius, kLashSegments);
   }
   return segments;
-}
-
-void append_hair(std::vector<HairSegment>& segments, const Point3& root, const Vector3& n, const Vector3& r,
-                 const Vector3& t, double root_angle, double curl, double fan, double length, double root_radius,
-                 int count) {
-  // A chord of an arc of constant curvature: along the mean angle, its
-  // length the arc's times sinc(half the turn).
-  const double step = length / count;
-  const double turn = curl / count;
-  const double chord = std::abs(turn) > 1e-12 ? step * std::sin(0.5 * turn) / (0.5 * turn) : step;
-  Point3 a = root - n * root_radius;  // sunk into the skin: no gap at the root
-  for (int j = 0; j < count; ++j) {
-    const double mid = (j + 0.5) / count;
-    const double angle = root_angle + curl * mid;
-    const Vector3 direction = (n * std::cos(angle) + r * std::sin(angle)) * std::cos(fan) + t * std::sin(fan);
-    const Point3 b = a + direction * chord;
-    segments.push_back({a, b, root_radius * (1 - 2.0 / 3.0 * mid)});
-    a = b;
-  }
 }
 
 }  // namespace purkinje::renderer

@@ -37,15 +37,6 @@ struct HairSegment {
   double radius_mm = 0;
 };
 
-// One hair appended to `segments` as `count` capsules: from `root` (sunk
-// by its radius along -n, so that no gap shows) along n cos(angle) +
-// r sin(angle), turned toward t by `fan`, where the angle runs linearly
-// from `root_angle` to root_angle + curl over its length (an arc of
-// constant curvature cut into chords), its radius tapering from
-// root_radius to a third of it at the tip.
-void append_hair(std::vector<HairSegment>& segments, const Point3& root, const Vector3& n, const Vector3& r,
-                 const Vector3& t, double root_angle, double curl, double fan, double length, double root_radius,
-                 int count);
 
 // The lashes of one lid: `upper` picks the upper lid's numbers; `stream`
 // separates the lids' (and eyes') draws.

@@ -31,10 +31,6 @@ double fraction_of_area(double u) {
   return (1 - std::sqrt(std::max(0.0, 1 - 2 * kTaper * u * (1 - kTaper / 2)))) / kTaper;
 }
 
-double smoothstep(double x, double from, double to) {
-  const double s = std::clamp((x - from) / (to - from), 0.0, 1.0);
-  return s * s * (3 - 2 * s);
-}
 
 // The face mesh's triangles over the band, seen along the head's -z: a
 // grid of cells of the head frame's (x, y), each listing the triangles

@@ -28,11 +28,6 @@ constexpr double kColumnStepMm = 0.25;
 constexpr double kRowStepMm = 0.25;
 constexpr double kCoarseStepMm = 2.5;      // the largest step, far from the eye
 
-double smoothstep(double x, double from, double to) {
-  const double s = std::clamp((x - from) / (to - from), 0.0, 1.0);
-  return s * s * (3 - 2 * s);
-}
-
 // Equal to max(a, b) where they differ by more than k; rounded within.
 double smooth_max(double a, double b, double k) {
   const double h = std::clamp(0.5 + 0.5 * (a - b) / k, 0.0, 1.0);
@@ -90,6 +85,11 @@ double margin_turned(double m, double x, double radius, const surfaces::MarginTu
 }
 
 }  // namespace
+
+double smoothstep(double x, double from, double to) {
+  const double s = std::clamp((x - from) / (to - from), 0.0, 1.0);
+  return s * s * (3 - 2 * s);
+}
 
 double fissure_coordinate(const Eyelids& lids, const Face& face, double x) {
   const double n = face.side == EyeSide::right ? x : -x;

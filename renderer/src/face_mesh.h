@@ -65,6 +65,10 @@ struct FaceMesh {
   MarginEdge upper_edge, lower_edge;
 };
 
+// 0 below `from`, 1 above `to`, the cubic 3s^2 - 2s^3 between (the face's
+// and the brows' blends).
+double smoothstep(double x, double from, double to);
+
 // -1 at the lateral canthus, 0 at the middle, 1 at the medial canthus, at
 // head-frame x.
 double fissure_coordinate(const Eyelids& lids, const Face& face, double x);

@@ -43,21 +43,19 @@ std::vector<Light> lights_of(const Scene& scene, const Camera& camera) {
   return lights;
 }
 
-bool scene_has_lashes(const Scene& scene) {
-  for (const Eye& eye : scene.eyes) {
+namespace {
+// Whether any eye's face has the hairs `hairs` points to.
+template <class Hairs>
+bool some_face_has(const Scene& scene, std::optional<Hairs> Face::*hairs) {
+  return std::any_of(scene.eyes.begin(), scene.eyes.end(), [&](const Eye& eye) {
     const auto& face = eye.appearance().face;
-    if (face && face->lashes) return true;
-  }
-  return false;
+    return face && (*face.*hairs).has_value();
+  });
 }
+}  // namespace
 
-bool scene_has_brows(const Scene& scene) {
-  for (const Eye& eye : scene.eyes) {
-    const auto& face = eye.appearance().face;
-    if (face && face->brows) return true;
-  }
-  return false;
-}
+bool scene_has_lashes(const Scene& scene) { return some_face_has(scene, &Face::lashes); }
+bool scene_has_brows(const Scene& scene) { return some_face_has(scene, &Face::brows); }
 
 bool scene_has_distractors(const Scene& scene) {
   if (!scene.spectacle_lenses.empty()) return true;

@@ -9,7 +9,12 @@ image radius) over the pixels that are iris through and through. The
 reference mode's own converged image (--converged samples per pixel, other
 seed) is the yardstick.
 
-    PYTHONPATH=build/release/python python3 benchmarks/limbus_radiometry.py [--converged 4096]
+--face gives the eye lids and a periocular face with every default (no
+lashes): the lids hem the iris in and light it, so the radiance is no longer
+a function of the radius alone, but each ring still compares the same
+pixels (those that are iris through and through in both images).
+
+    PYTHONPATH=build/release/python python3 benchmarks/limbus_radiometry.py [--converged 4096] [--face]
 """
 
 import argparse
@@ -51,9 +56,13 @@ def rings(image, mask):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--converged", type=int, default=4096, help="the converged reference's samples per pixel")
+    parser.add_argument("--face", action="store_true", help="the eye with a periocular face")
     args = parser.parse_args()
     for model in ("navarro", "keratometric"):
-        scene = purkinje.parse_scene(SCENE.replace("MODEL", model))
+        text = SCENE.replace("MODEL", model)
+        if args.face:
+            text = text.replace('"fundus_reflectance": 0 }', '"fundus_reflectance": 0 }, "eyelids": {}, "face": {}')
+        scene = purkinje.parse_scene(text)
         truth, truth_mask, seconds = render(scene, mode="reference", samples_per_pixel=args.converged, seed=99)
         print(f"{model}: reference at {args.converged} samples per pixel, {seconds:.0f} s")
         truth_rings = rings(truth, truth_mask)

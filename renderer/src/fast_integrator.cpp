@@ -42,6 +42,12 @@ constexpr int kDiffuseMissRays = 16;
 // A hair (no cache node lies on one: they are seen through) takes the
 // cached light behind it, or gathers fewer: its albedo is low, its pixels few.
 constexpr int kHairGatherRays = 4;
+// A surface seen in the cornea's mirror gathers its own interreflection
+// (no cache serves it) with a few rays: what the cornea reflects is a few
+// percent of the iris pixel it lies over, but near the limbus, where the
+// reflectance rises and the lids' corners are mirrored, the lids' bounced
+// light left out made the iris 1-1.6% too dark (docs/rendering.md).
+constexpr int kMirrorGatherRays = 4;
 // The visibility cache (screen_cache.h): its nodes trace every light's
 // shadow ray; a point between four that agree traces none. Coarse nodes
 // every 8 px, and every 2 px in the coarse cells whose corners disagree or
@@ -164,44 +170,46 @@ class FastIntegrator final : public PathIntegrator {
   void sample(const Ray& ray, const Hit& first_hit, const Pixel& image_position, std::uint64_t path,
               Contribution& out, PrimaryRecord& record, double reflection_weight) const override {
     const Primary primary{&record, image_position, path, reflection_weight};
-    trace(ray, first_hit, 0, 1.0, out, &primary);
+    trace(ray, first_hit, 0, 1.0, out, primary);
   }
 
  private:
-  // What the transmitted chain of a camera ray carries.
+  // What a camera sample's chains carry: the transmitted one (its record,
+  // the pixel whose caches serve it) and those reflected off its way.
   struct Primary {
     PrimaryRecord* record;
     Pixel image_position;
     std::uint64_t path;
     double reflection_weight = 1;  // of the branches the cornea reflects off this chain
+    // The chain was reflected off the cornea (or a lens): the caches, built
+    // for what the camera sees directly, do not serve its points.
+    bool mirrored = false;
   };
 
   // Radiance arriving along `ray`, times `weight`, added to `out`.
-  // `primary` is given along the transmitted chain of a camera ray.
-  void trace(const Ray& ray, int depth, double weight, Contribution& out, const Primary* primary) const {
+  void trace(const Ray& ray, int depth, double weight, Contribution& out, const Primary& primary) const {
     trace(ray, tracer_.intersect(ray), depth, weight, out, primary);
   }
   // The same, where the ray's first hit is known.
   void trace(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
-             const Primary* primary) const {
-    record_hit(hit, camera_, depth, primary ? primary->record : nullptr);
+             const Primary& primary) const {
+    record_hit(hit, camera_, depth, primary.record);
     switch (scattering_of(hit.surface)) {
       case Scattering::none:
         return;
       case Scattering::diffuse:
         if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
-          if (!primary) {
+          const DiffusePoint p = diffuse_point(ray, hit);
+          if (primary.mirrored) {
             direct_light(hit, albedo * weight, out);
+            if (!is_hair(hit.surface)) interreflection(p, albedo * weight, primary, out);
             return;
           }
           // Where the camera sees the surface directly, shadows come from
-          // the visibility cache where it knows them, and interreflection
-          // is added: seen in the cornea's mirror it is a few percent of a
-          // few percent.
-          const DiffusePoint p = diffuse_point(ray, hit);
-          const VisibilityCache::Agreement agreed = visibility_->at(primary->image_position, p);
+          // the visibility cache where it knows them.
+          const VisibilityCache::Agreement agreed = visibility_->at(primary.image_position, p);
           direct_light(hit, albedo * weight, out, &agreed);
-          interreflection(p, albedo * weight, *primary, out);
+          interreflection(p, albedo * weight, primary, out);
         }
         return;
       case Scattering::iris: {
@@ -286,7 +294,9 @@ class FastIntegrator final : public PathIntegrator {
     // A hair takes the cached light of the surface behind it, a few
     // millimetres away (no node lies on a hair).
     const bool hair = is_hair(p.surface);
-    if (!diffuse_->irradiance(primary.image_position, hair ? diffuse_point_at(primary.image_position) : p, e)) {
+    if (primary.mirrored) {
+      gather_hemisphere(p.point, p.normal, kMirrorGatherRays, kMirrorGatherStream, primary.path, e);
+    } else if (!diffuse_->irradiance(primary.image_position, hair ? diffuse_point_at(primary.image_position) : p, e)) {
       std::fill(e, e + lights_.size(), 0.0);
       gather_hemisphere(p.point, p.normal, hair ? kHairGatherRays : kDiffuseMissRays, kCacheMissStream,
                         primary.path, e);
@@ -485,9 +495,14 @@ class FastIntegrator final : public PathIntegrator {
   // percent of the iris's light, more near the limbus; it varies slowly
   // around the axis but rises steeply near the limbus (kIrisRingSpacingPx),
   // so it is gathered at the nodes of rings (channels: groups of lights)
-  // over the hemisphere (kIndirectRays low-discrepancy directions,
-  // cosine-distributed), out to where the iris ends.
-  static constexpr int kIndirectRays = 32;
+  // over the hemisphere, out to where the iris ends: low-discrepancy
+  // directions, cosine-distributed, shifted node by node. The same
+  // directions at every node (all share the iris plane's normal) made one
+  // error of all of them: with a face, whose lids close bright round the
+  // limbus in a thin band of the hemisphere, the iris was 1.4% too dark
+  // (the headset's). A face's eye takes four times the rays: with 32 the
+  // shifted nodes' noise left rings 1% off, with 128 0.4% (docs/rendering.md).
+  static constexpr int kIndirectRays = 32, kIndirectRaysWithFace = 128;
 
   void build_iris_indirect(int eye_index, int rings) {
     const Eye& eye = scene_.eyes[eye_index];
@@ -497,9 +512,11 @@ class FastIntegrator final : public PathIntegrator {
     cache.resize(m.iris_outer_radius_mm(), rings, kIrisRingAzimuths, groups);
     const double z = m.anterior_cornea.radius_mm - m.iris_depth_mm;
     const UnitVector3 n = eye.world_from_eye().rotation() * UnitVector3::unit_z();
+    const int rays = eye.appearance().face ? kIndirectRaysWithFace : kIndirectRays;
     tbb::parallel_for(std::size_t{0}, cache.nodes(), [&](std::size_t node) {
       std::vector<double> e(lights, 0.0);
-      gather_hemisphere(eye.world_from_eye() * cache.node_point(node, z), n.vector(), kIndirectRays, 0.5, 0.5, e.data());
+      gather_hemisphere(eye.world_from_eye() * cache.node_point(node, z), n.vector(), rays, kIrisIndirectStream,
+                        static_cast<std::uint64_t>(eye_index) * cache.nodes() + node, e.data());
       double* out = cache.node_values(node);
       for (std::size_t k = 0; k < lights; ++k) out[group_of_light_[k]] += e[k];
     });
@@ -597,7 +614,7 @@ class FastIntegrator final : public PathIntegrator {
   // Fresnel reflection and refraction at a corneal surface, both traced.
   // Radiance crossing from index n2 into n1 scales by (n1 / n2)^2.
   void interface(const Ray& ray, const Hit& hit, int depth, double weight, Contribution& out,
-                 const Primary* primary) const {
+                 const Primary& primary) const {
     if (depth >= max_depth_) return;
     const InterfaceCrossing c = cross_interface(scene_, ray, hit);
     if (c.transmitted) {
@@ -609,9 +626,10 @@ class FastIntegrator final : public PathIntegrator {
     // Which reflections are traced does not depend on the sample's share
     // of its pixel's reflection; their weight does.
     const double w_reflected = weight * c.reflectance;
-    const double share = primary ? primary->reflection_weight : 1.0;
+    const double share = primary.reflection_weight;
     if (w_reflected > kMinBranchWeight && c.reflected && share > 0) {
-      trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected * share, out, nullptr);
+      const Primary mirror{nullptr, primary.image_position, primary.path, 1.0, true};
+      trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected * share, out, mirror);
     }
   }
 

@@ -25,6 +25,8 @@ enum Stream : std::uint64_t {
   kCacheMissStream = 4,   // fast: the gather where no node serves a point
   kPathStream = 3,        // reference: a camera path's decisions
   kPhotonStream = 4,      // reference: the photons through the cornea
+  kIrisIndirectStream = 5,  // fast: the iris's indirect light at its ring nodes
+  kMirrorGatherStream = 6,  // fast: the gather at a surface seen in the cornea's mirror
   kSensorNoiseStream = 0x8000000000000001ull,
   // A sensor's hot pixels, keyed by its hot_pixel_seed (not the render's).
   kHotPixelStream = 0x8000000000000002ull,

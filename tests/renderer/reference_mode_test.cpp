@@ -102,7 +102,7 @@ TEST(ReferenceMode, HeadsetIrisRadianceAgreesWithFastModeWithin2Percent) { expec
 // to get right: the light reflected totally inside the cornea rises there
 // within 0.4 mm, and the lit region ends at the limbus's shadow and the
 // chamber angle.
-Scene facing_eye(const std::string& model) {
+Scene facing_eye(const std::string& model, bool face = false) {
   return parse_scene(R"({ "format": 1, "name": "facing",
     "cameras": [ { "name": "cam", "resolution_px": [120, 120], "focal_length_mm": 30, "pixel_pitch_mm": 0.006,
                    "sensor": { "noise": false }, "position_mm": [0, 0, 0], "look_at_mm": [0, 0, 600], "up": [0, -1, 0] } ],
@@ -111,7 +111,8 @@ Scene facing_eye(const std::string& model) {
       { "name": "right", "position_mm": [ 100, 0, 0], "radiant_intensity_w_sr": 0.3, "wavelength_nm": 850 } ],
     "eyes": [ { "model": ")" + model + R"(", "pupil": { "radius_mm": 2.0 },
                 "position": { "cornea_center_mm": [0, 0, 600] }, "orientation": { "optical_axis": [0, 0, -1] },
-                "appearance": { "iris_albedo": 0.2, "iris_texture_contrast": 0, "fundus_reflectance": 0 } } ] })",
+                "appearance": { "iris_albedo": 0.2, "iris_texture_contrast": 0, "fundus_reflectance": 0 })" +
+                         std::string(face ? R"(, "eyelids": {}, "face": {} )" : "") + R"( } ] })",
                      "facing.json");
 }
 
@@ -120,11 +121,11 @@ Scene facing_eye(const std::string& model) {
 // that are iris through and through in both). The reference's ring means
 // at 16 rays per pixel are within 0.3% of its own converged image (1024
 // rays, 2^26 photons) on a larger view of this eye.
-void expect_iris_rings_agree(const std::string& model) {
-  const Scene scene = facing_eye(model);
+void expect_iris_rings_agree(const std::string& model, bool face = false, int samples_per_pixel = 16) {
+  const Scene scene = facing_eye(model, face);
   RenderOptions options;
   options.noise = false;
-  options.samples_per_pixel = 16;
+  options.samples_per_pixel = samples_per_pixel;
   options.edge_samples_per_pixel = 0;
   options.reference_photons_per_light = std::int64_t{1} << 20;
   const RenderResult fast = render(scene, 0, options);
@@ -163,6 +164,14 @@ TEST(ReferenceMode, IrisAgreesWithFastModeWithin1PercentAtEveryRadiusThroughTwoS
 }
 TEST(ReferenceMode, IrisAgreesWithFastModeWithin1PercentAtEveryRadiusThroughOneSurface) {
   expect_iris_rings_agree("keratometric");
+}
+// With a face the lids hem the iris in (the rings keep the pixels they leave
+// visible) and close bright round the limbus: seen through the cornea from
+// the iris's rim and mirrored by the cornea over it. Left out, their bounced
+// light made the outer rings 1-1.6% too dark; gathered at the same
+// directions at every ring node, the whole iris 1.2-1.7%.
+TEST(ReferenceMode, IrisWithAFaceAgreesWithFastModeWithin1PercentAtEveryRadius) {
+  expect_iris_rings_agree("keratometric", true, 64);
 }
 
 // The limbus's region grown by its own size on every side: lids, the

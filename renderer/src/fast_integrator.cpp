@@ -2,7 +2,8 @@
 // light from point lights with shadow rays (a screen-space visibility
 // cache where the camera sees the surface), the iris's light from exact
 // caches through the cornea, interreflection from a screen-space diffuse
-// cache. Physics and approximations: docs/rendering.md.
+// cache (gathered per sample where none serves: surfaces seen in the
+// cornea's mirror, creases). Physics and approximations: docs/rendering.md.
 
 #include <tbb/parallel_for.h>
 
@@ -285,8 +286,8 @@ class FastIntegrator final : public PathIntegrator {
   }
 
   // Irradiance from light that bounced off other diffuse surfaces, at a
-  // diffuse hit the camera sees: from the cache, or gathered here where no
-  // cache node serves the point.
+  // diffuse hit: from the cache where the camera sees the point and a node
+  // serves it, gathered here otherwise.
   void interreflection(const DiffusePoint& p, double scaled_albedo, const Primary& primary,
                        Contribution& out) const {
     PerLight scratch(lights_.size());  // written by the cache or the gather
@@ -516,7 +517,7 @@ class FastIntegrator final : public PathIntegrator {
     tbb::parallel_for(std::size_t{0}, cache.nodes(), [&](std::size_t node) {
       std::vector<double> e(lights, 0.0);
       gather_hemisphere(eye.world_from_eye() * cache.node_point(node, z), n.vector(), rays, kIrisIndirectStream,
-                        static_cast<std::uint64_t>(eye_index) * cache.nodes() + node, e.data());
+                        (static_cast<std::uint64_t>(eye_index) << 32) + node, e.data());
       double* out = cache.node_values(node);
       for (std::size_t k = 0; k < lights; ++k) out[group_of_light_[k]] += e[k];
     });

@@ -36,7 +36,8 @@ class PathIntegrator {
 
 // Fast mode (fast_integrator.cpp): Fresnel-weighted splitting at the
 // cornea, direct light with shadow rays, the iris's light from exact
-// caches, interreflection from screen-space caches covering `traced`.
+// caches, interreflection from screen-space caches covering `traced`
+// (gathered per sample where they do not serve).
 std::unique_ptr<PathIntegrator> make_fast_integrator(const Scene& scene, const Camera& camera,
                                                      const RayTracer& tracer, const RenderOptions& options,
                                                      const PixelRegion& traced);

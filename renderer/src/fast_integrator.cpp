@@ -204,14 +204,16 @@ class FastIntegrator final : public PathIntegrator {
         return;
       case Scattering::diffuse:
         if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
-          const DiffusePoint p = diffuse_point(ray, hit);
           if (primary.mirrored) {
             direct_light(hit, albedo * weight, out);
-            if (primary.gathers && !is_hair(hit.surface)) interreflection(p, albedo * weight, primary, out);
+            if (primary.gathers && !is_hair(hit.surface)) {
+              interreflection(diffuse_point(ray, hit), albedo * weight, primary, out);
+            }
             return;
           }
           // Where the camera sees the surface directly, shadows come from
           // the visibility cache where it knows them.
+          const DiffusePoint p = diffuse_point(ray, hit);
           const VisibilityCache::Agreement agreed = visibility_->at(primary.image_position, p);
           direct_light(hit, albedo * weight, out, &agreed);
           interreflection(p, albedo * weight, primary, out);
@@ -324,10 +326,6 @@ class FastIntegrator final : public PathIntegrator {
   void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, std::uint64_t stream,
                          std::uint64_t key, double* e) const {
     const double shift_u = uniform01(seed_, stream, 2 * key), shift_v = uniform01(seed_, stream, 2 * key + 1);
-    gather_hemisphere(point, normal, rays, shift_u, shift_v, e);
-  }
-  void gather_hemisphere(const Point3& point, const Vector3& normal, int rays, double shift_u, double shift_v,
-                         double* e) const {
     PerLight scratch(lights_.size());
     double* once = scratch.data();
     double onward = 0;

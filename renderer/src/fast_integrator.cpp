@@ -135,6 +135,7 @@ class FastIntegrator final : public PathIntegrator {
       return !tracer_.occluded_except_cornea(light, cornea);
     };
     for (const Light& l : lights_) {
+      if (hair_) hair_shadows_.push_back(tracer_.hair_shadows(l.position));
       const auto same = std::find(group_electrons_.begin(), group_electrons_.end(), l.electrons_per_radiance);
       group_of_light_.push_back(static_cast<std::size_t>(same - group_electrons_.begin()));
       if (same == group_electrons_.end()) group_electrons_.push_back(l.electrons_per_radiance);
@@ -380,12 +381,19 @@ class FastIntegrator final : public PathIntegrator {
       if (agreed && k < VisibilityCache::kMaxLights && (agreed->known >> k & 1)) {
         // The cache's nodes ignore the hairs (lit()): their thin shadows
         // are traced here, against the hairs alone.
-        if (!(agreed->lit >> k & 1) || (hair_ && tracer_.occluded_by_hair(origin, l.position))) continue;
+        if (!(agreed->lit >> k & 1) || (hair_ && occluded_by_hair(origin, k, l))) continue;
       } else if (tracer_.occluded(origin, l.position)) {
         continue;
       }
       add(k, lambert_radiance(scaled_albedo, l, cos_theta, d2));
     }
+  }
+
+  // Whether a hair shades `origin` from light k, seen as `l`: from the
+  // light's map, unless a spectacle lens moves its image with the point.
+  bool occluded_by_hair(const Point3& origin, std::size_t k, const Light& l) const {
+    return l.position == lights_[k].position ? hair_shadows_[k].occluded(origin)
+                                             : tracer_.occluded_by_hair(origin, l.position);
   }
 
   // Irradiance (W/m^2) at a point facing `normal` from every light it
@@ -642,6 +650,7 @@ class FastIntegrator final : public PathIntegrator {
   const RayTracer& tracer_;
   bool hair_;  // the scene has lashes or brows: settled shadow rays are traced against them
   std::vector<Light> lights_;
+  std::vector<HairShadows> hair_shadows_;  // [light], with hairs
   SeenLights seen_;  // the lights through spectacle lenses
   int max_depth_ = specular_depth(scene_, kMaxSpecularDepth);
   std::vector<std::vector<IrisIrradianceCache>> iris_;  // [eye][light]

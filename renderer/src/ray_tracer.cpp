@@ -41,7 +41,9 @@
 // intersected in float by kernels that differ between instruction sets).
 // They have their own mask bit and flag (queries that look through them),
 // and sit in a second scene of their own too (occluded_by_hair: a shadow
-// ray tested against the hairs alone traverses only their tree).
+// ray tested against the hairs alone traverses only their tree). Toward a
+// light, HairShadows answers the same without Embree: a light's map of
+// the directions each capsule covers, then the capsules' own test.
 
 #include "purkinje/renderer/ray_tracer.h"
 
@@ -53,6 +55,7 @@
 #include <memory>
 #include <mutex>
 #include <new>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -703,6 +706,140 @@ bool RayTracer::occluded_by_hair(const Point3& from, const Point3& to) const {
     return clip_to_box(box, from, to - from, t0, t1);
   });
   return near && impl_->occluded(from, to, {}, impl_->hair_scene);
+}
+
+bool HairShadows::Footprint::covers(double u, double v, double pad) const {
+  const double dx = bu - au, dy = bv - av, px = u - au, py = v - av;
+  const double length2 = dx * dx + dy * dy;
+  const double h = length2 > 0 ? std::clamp((px * dx + py * dy) / length2, 0.0, 1.0) : 0.0;
+  const double ex = px - h * dx, ey = py - h * dy, r = reach + pad;
+  return ex * ex + ey * ey <= r * r;
+}
+
+// The map. A capsule with axis a-b and radius r projects (w = (x / z, y / z)
+// in the light's frame, z along the plane's normal) into the points within
+// `reach` of the segment from w(a) to w(b): lines project to lines, and
+// w's derivative is at most sqrt(1 + |w|^2) / z, so a point r from the
+// axis lands at most r sqrt(1 + |w|^2) / z from the axis's image, with z
+// and |w| bounded over the capsule's box by its corners (the box projects
+// to the hull of its corners' images). Each cell lists the capsules whose
+// reach, padded by half the cell's diagonal, covers its centre.
+HairShadows RayTracer::hair_shadows(const Point3& light) const {
+  check_ray(light, Vector3{0, 0, 0}, 0, 0);
+  HairShadows map(this, light);
+  const auto& hairs = impl_->hairs;
+  if (hairs.empty()) return map;
+  Box all = impl_->hair_bounds.front();
+  for (const Box& b : impl_->hair_bounds) all = united(all, b);
+  const auto axis = UnitVector3::try_normalize((all.lo - light) * 0.5 + (all.hi - light) * 0.5);
+  if (!axis) return map;
+  const Vector3 ez = *axis;
+  Vector3 ex = std::abs(ez.x) < 0.9 ? cross(ez, Vector3{1, 0, 0}) : cross(ez, Vector3{0, 1, 0});
+  ex = ex * (1.0 / ex.norm());
+  const Vector3 ey = cross(ez, ex);
+
+  std::vector<HairShadows::Footprint>& footprints = map.footprints_;
+  double u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;
+  for (std::size_t g = 0; g < hairs.size(); ++g) {
+    const std::vector<HairSegment>& segments = hairs[g]->segments();
+    for (std::size_t i = 0; i < segments.size(); ++i) {
+      const Box box = hairs[g]->bounds(static_cast<unsigned>(i));
+      double z_min = INFINITY, w2_max = 0;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Point3 c{corner & 1 ? box.hi.x : box.lo.x, corner & 2 ? box.hi.y : box.lo.y,
+                       corner & 4 ? box.hi.z : box.lo.z};
+        const Vector3 d = c - light;
+        const double z = dot(d, ez);
+        // Within about 78 degrees of the normal, or no map: a light among
+        // the hairs, which no one plane in front of it shows.
+        if (!(z > 0.2 * d.norm())) return map;
+        const double u = dot(d, ex) / z, v = dot(d, ey) / z;
+        z_min = std::min(z_min, z);
+        w2_max = std::max(w2_max, u * u + v * v);
+      }
+      const HairSegment& c = segments[i];
+      const Vector3 a = c.a - light, b = c.b - light;
+      const double reach = c.radius_mm * std::sqrt(1 + w2_max) / z_min;
+      const HairShadows::Footprint f{dot(a, ex) / dot(a, ez),    dot(a, ey) / dot(a, ez),
+                                     dot(b, ex) / dot(b, ez),    dot(b, ey) / dot(b, ez),
+                                     reach * (1 + 1e-6) + 1e-9, static_cast<std::uint32_t>(g),
+                                     static_cast<std::uint32_t>(i)};
+      u_lo = std::min({u_lo, f.au - f.reach, f.bu - f.reach});
+      u_hi = std::max({u_hi, f.au + f.reach, f.bu + f.reach});
+      v_lo = std::min({v_lo, f.av - f.reach, f.bv - f.reach});
+      v_hi = std::max({v_hi, f.av + f.reach, f.bv + f.reach});
+      footprints.push_back(f);
+    }
+  }
+  // Square cells, 256 along the longer side.
+  constexpr double kCellsAcross = 256;
+  const double cell = std::max(u_hi - u_lo, v_hi - v_lo) / kCellsAcross;
+  if (!(cell > 0)) return map;
+  map.ex_ = ex;
+  map.ey_ = ey;
+  map.ez_ = ez;
+  map.u0_ = u_lo;
+  map.v0_ = v_lo;
+  map.inverse_cell_ = 1 / cell;
+  map.columns_ = static_cast<std::size_t>(std::ceil((u_hi - u_lo) / cell)) + 1;
+  map.rows_ = static_cast<std::size_t>(std::ceil((v_hi - v_lo) / cell)) + 1;
+  const double half_diagonal = cell * std::numbers::sqrt2 / 2;
+  // Twice over the capsules' cells: counting, then filling.
+  map.first_.assign(map.columns_ * map.rows_ + 1, 0);
+  const auto each_cell = [&](const HairShadows::Footprint& f, const auto& visit) {
+    // A cell wider on each side: the queries round their own way.
+    const auto index = [&](double w, double w0, std::size_t n) {
+      return std::min(static_cast<std::size_t>(std::max(0.0, (w - w0) / cell)), n - 1);
+    };
+    const std::size_t c0 = index(std::min(f.au, f.bu) - f.reach - cell, u_lo, map.columns_);
+    const std::size_t c1 = index(std::max(f.au, f.bu) + f.reach + cell, u_lo, map.columns_);
+    const std::size_t r0 = index(std::min(f.av, f.bv) - f.reach - cell, v_lo, map.rows_);
+    const std::size_t r1 = index(std::max(f.av, f.bv) + f.reach + cell, v_lo, map.rows_);
+    for (std::size_t r = r0; r <= r1; ++r) {
+      for (std::size_t col = c0; col <= c1; ++col) {
+        const double u = u_lo + (static_cast<double>(col) + 0.5) * cell;
+        const double v = v_lo + (static_cast<double>(r) + 0.5) * cell;
+        if (f.covers(u, v, half_diagonal)) visit(r * map.columns_ + col);
+      }
+    }
+  };
+  for (const HairShadows::Footprint& f : footprints) each_cell(f, [&](std::size_t c) { ++map.first_[c + 1]; });
+  for (std::size_t c = 0; c + 1 < map.first_.size(); ++c) map.first_[c + 1] += map.first_[c];
+  map.footprint_of_entry_.resize(map.first_.back());
+  std::vector<std::uint32_t> next(map.first_.begin(), map.first_.end() - 1);
+  for (std::size_t k = 0; k < footprints.size(); ++k) {
+    each_cell(footprints[k], [&](std::size_t c) { map.footprint_of_entry_[next[c]++] = static_cast<std::uint32_t>(k); });
+  }
+  map.mapped_ = true;
+  return map;
+}
+
+bool HairShadows::occluded(const Point3& from) const {
+  if (!mapped_ || !from.is_finite()) return tracer_->occluded_by_hair(from, light_);
+  // Every point of the segment to the light projects where `from` does; one
+  // behind the light's plane meets no hair (all lie in front).
+  const Vector3 d = from - light_;
+  const double z = dot(d, ez_);
+  if (!(z > 0)) return false;
+  const double u = dot(d, ex_) / z, v = dot(d, ey_) / z;
+  const double column = (u - u0_) * inverse_cell_, row = (v - v0_) * inverse_cell_;
+  if (!(column >= 0 && row >= 0 && column < static_cast<double>(columns_) && row < static_cast<double>(rows_))) {
+    return false;
+  }
+  const std::size_t cell = static_cast<std::size_t>(row) * columns_ + static_cast<std::size_t>(column);
+  const std::uint32_t begin = first_[cell], end = first_[cell + 1];
+  if (begin == end) return false;
+  Lane lane;
+  if (!RayTracer::Impl::segment_lane(from, light_, lane)) return false;
+  const auto& hairs = tracer_->impl_->hairs;
+  for (std::uint32_t i = begin; i < end; ++i) {
+    // The footprint first (a few multiplications): most of a cell's
+    // capsules pass the ray by.
+    const Footprint& f = footprints_[footprint_of_entry_[i]];
+    double t;
+    if (f.covers(u, v, 0) && hairs[f.group]->hit(lane, f.segment, t)) return true;
+  }
+  return false;
 }
 
 }  // namespace purkinje::renderer

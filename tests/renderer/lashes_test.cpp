@@ -235,6 +235,42 @@ TEST(Lashes, QueriesCanLookThroughTheLashesOrAtThemAlone) {
   EXPECT_EQ(plain.intersect(ray).surface, Surface::skin);
 }
 
+// A light's map of the hairs' shadows answers as the hairs' own tree does,
+// at every point of a box round the lids (some of them in the lashes'
+// shadows, most not), for lights before the face near and far, one behind
+// it, and one among the lashes (no plane shows them all from there: the
+// map leaves it to the tree).
+TEST(Lashes, ALightsMapOfTheHairsShadowsAnswersAsTheirTreeDoes) {
+  Scene scene = lashed_face(0);
+  EyeAppearance look = scene.eyes[0].appearance();
+  look.face->brows = Brows{};
+  scene.eyes[0].set_appearance(look);
+  const RayTracer tracer(scene);
+  for (const Point3 light : {Point3{10, -20, 40}, Point3{-30, 40, 600}, Point3{0, 0, -100}, Point3{0, 7, 13}}) {
+    SCOPED_TRACE(testing::Message() << "light (" << light.x << ", " << light.y << ", " << light.z << ")");
+    const HairShadows map = tracer.hair_shadows(light);
+    int shaded = 0, points = 0, disagree = 0;
+    for (double x = -16; x <= 16; x += 0.37) {
+      for (double y = -8; y <= 30; y += 0.29) {
+        for (double z = 0; z <= 22; z += 1.3) {
+          const Point3 p{x, y, z};
+          const bool by_tree = tracer.occluded_by_hair(p, light);
+          disagree += map.occluded(p) != by_tree;
+          shaded += by_tree;
+          ++points;
+        }
+      }
+    }
+    EXPECT_EQ(disagree, 0) << "of " << points;
+    EXPECT_GT(shaded, 200) << "of " << points;  // a test that could fail
+  }
+  EXPECT_THROW(tracer.hair_shadows(Point3{NAN, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(tracer.hair_shadows(Point3{0, 0, 100}).occluded(Point3{0, INFINITY, 0}), std::invalid_argument);
+  // Without hairs nothing shades.
+  const RayTracer bare{Scene{}};
+  EXPECT_FALSE(bare.hair_shadows(Point3{0, 0, 100}).occluded(Point3{0, 0, 0}));
+}
+
 // The fast mode's visibility cache interpolates shadows between nodes
 // that look through the lashes; the lashes' own thin shadows are traced
 // per sample. On the headset's upper lid, under its lashes' shadows, the

@@ -570,7 +570,9 @@ Hit follow_through(const RayTracer& tracer, const Ray& ray, bool lids, int trial
         break;
       case Surface::mesh:
       case Surface::lash:
-        ADD_FAILURE() << "trial " << trial << ": these scenes have no meshes or lashes";
+      case Surface::brow:
+      case Surface::spectacle_lens:
+        ADD_FAILURE() << "trial " << trial << ": these scenes have no meshes, hairs or spectacle lenses";
         break;
       case Surface::none:
         break;

@@ -145,7 +145,9 @@ TEST(ScleralHighlights, AMovingEyesHighlightsAreTheWholeExposures) {
   EXPECT_GT(moving.size(), mid.views[0].distractors.size());
   for (std::size_t k = 0; k < moving.size(); ++k) {
     EXPECT_EQ(moving[k].illuminator, result.distractors[k].illuminator);
-    if (k > 0) EXPECT_LT(moving[k - 1].illuminator, moving[k].illuminator);
+    if (k > 0) {
+      EXPECT_LT(moving[k - 1].illuminator, moving[k].illuminator);
+    }
   }
 }
 

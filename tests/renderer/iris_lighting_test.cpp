@@ -754,7 +754,9 @@ TEST(IrisAlbedo, FurrowsAreBrokenDarkRingsOverTheOuterThird) {
     }
     darkest_ring = std::min(darkest_ring, sum / n);
     // Broken: no ring is dark all round.
-    if (dark > 0) EXPECT_GT(untouched, n / 10) << "rho " << rho;
+    if (dark > 0) {
+      EXPECT_GT(untouched, n / 10) << "rho " << rho;
+    }
   }
   EXPECT_LT(darkest_ring, 0.3 * 0.85);
   // The mean falls by the darkened area's share (scene-format.md: 4%).
@@ -803,7 +805,7 @@ TEST(IrisAlbedo, FrecklesAreThatManyRoundSpots) {
         const auto [u, v] = stack.back();
         stack.pop_back();
         x0 = std::min(x0, u), x1 = std::max(x1, u), y0 = std::min(y0, v), y1 = std::max(y1, v);
-        for (const auto [du, dv] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        for (const auto& [du, dv] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
           const int p = u + du, q = v + dv;
           if (p < 0 || q < 0 || p >= size || q >= size || at(p, q) != -1) continue;
           at(p, q) = spots;

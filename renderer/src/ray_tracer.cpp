@@ -751,7 +751,8 @@ HairShadows RayTracer::hair_shadows(const Point3& light) const {
         const Vector3 d = c - light;
         const double z = dot(d, ez);
         // Within about 78 degrees of the normal, or no map: a light among
-        // the hairs, which no one plane in front of it shows.
+        // the hairs or beside them, which no one plane in front of it shows
+        // well.
         if (!(z > 0.2 * d.norm())) return map;
         const double u = dot(d, ex) / z, v = dot(d, ey) / z;
         z_min = std::min(z_min, z);
@@ -815,10 +816,10 @@ HairShadows RayTracer::hair_shadows(const Point3& light) const {
 }
 
 bool HairShadows::occluded(const Point3& from) const {
-  if (!mapped_ || !from.is_finite()) return tracer_->occluded_by_hair(from, light_);
   // Every point of the segment to the light projects where `from` does; one
   // behind the light's plane meets no hair (all lie in front).
   const Vector3 d = from - light_;
+  if (!mapped_ || !d.is_finite()) return tracer_->occluded_by_hair(from, light_);  // which checks the points
   const double z = dot(d, ez_);
   if (!(z > 0)) return false;
   const double u = dot(d, ex_) / z, v = dot(d, ey_) / z;

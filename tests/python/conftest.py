@@ -12,19 +12,26 @@ import pytest
 def _take_a_core():
     """One core for this test process, as tests/one_core.cpp takes one for
     the C++ tests under the coverage run (scripts/test.sh): before the
-    package starts its threads."""
+    package starts its threads, which then number one (TBB's default is the
+    process's cores; no test asks the package for more)."""
     folder = os.environ.get("PURKINJE_TEST_CORE_LOCKS")
     if not folder:
         return None
     for cpu in sorted(os.sched_getaffinity(0)):
-        fd = os.open(os.path.join(folder, f"core-{cpu}.lock"), os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fd = os.open(os.path.join(folder, f"core-{cpu}.lock"), os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError:
+            continue
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
             os.close(fd)
             continue
         for task in os.listdir("/proc/self/task"):  # every thread, not only this one
-            os.sched_setaffinity(int(task), {cpu})
+            try:
+                os.sched_setaffinity(int(task), {cpu})
+            except OSError:  # a thread that has ended since
+                pass
         return fd  # held until the process ends
     return None
 

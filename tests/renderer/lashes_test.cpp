@@ -237,9 +237,9 @@ TEST(Lashes, QueriesCanLookThroughTheLashesOrAtThemAlone) {
 
 // A light's map of the hairs' shadows answers as the hairs' own tree does,
 // at every point of a box round the lids (some of them in the lashes'
-// shadows, most not), for lights before the face near and far, one behind
-// it, and one among the lashes (no plane shows them all from there: the
-// map leaves it to the tree).
+// shadows, most not), for lights before the face near and far and one
+// behind it; a light among the lashes has no map (no plane shows them all
+// from there) and asks the tree.
 TEST(Lashes, ALightsMapOfTheHairsShadowsAnswersAsTheirTreeDoes) {
   Scene scene = lashed_face(0);
   EyeAppearance look = scene.eyes[0].appearance();
@@ -249,6 +249,7 @@ TEST(Lashes, ALightsMapOfTheHairsShadowsAnswersAsTheirTreeDoes) {
   for (const Point3 light : {Point3{10, -20, 40}, Point3{-30, 40, 600}, Point3{0, 0, -100}, Point3{0, 7, 13}}) {
     SCOPED_TRACE(testing::Message() << "light (" << light.x << ", " << light.y << ", " << light.z << ")");
     const HairShadows map = tracer.hair_shadows(light);
+    EXPECT_EQ(map.mapped(), light.z != 13);
     int shaded = 0, points = 0, disagree = 0;
     for (double x = -16; x <= 16; x += 0.37) {
       for (double y = -8; y <= 30; y += 0.29) {
@@ -268,6 +269,7 @@ TEST(Lashes, ALightsMapOfTheHairsShadowsAnswersAsTheirTreeDoes) {
   EXPECT_THROW(tracer.hair_shadows(Point3{0, 0, 100}).occluded(Point3{0, INFINITY, 0}), std::invalid_argument);
   // Without hairs nothing shades.
   const RayTracer bare{Scene{}};
+  EXPECT_FALSE(bare.hair_shadows(Point3{0, 0, 100}).mapped());
   EXPECT_FALSE(bare.hair_shadows(Point3{0, 0, 100}).occluded(Point3{0, 0, 0}));
 }
 

@@ -106,6 +106,10 @@ class HairShadows {
  public:
   // Throws std::invalid_argument for a non-finite point.
   bool occluded(const Point3& from) const;
+  // Whether the map answers (else every query asks the tracer): false
+  // without hairs, or where some hair lies more than 78 degrees off the
+  // plane's normal (a light among the hairs or beside them).
+  bool mapped() const { return mapped_; }
 
  private:
   friend class RayTracer;
@@ -120,9 +124,7 @@ class HairShadows {
   };
   const RayTracer* tracer_ = nullptr;
   Point3 light_;
-  // Without a map (no hairs, or a light among them, where no plane faces
-  // them all), each query asks the tracer.
-  bool mapped_ = false;
+  bool mapped_ = false;  // mapped()
   Vector3 ex_, ey_, ez_;  // the plane's axes and its normal, away from the light
   double u0_ = 0, v0_ = 0, inverse_cell_ = 0;
   std::size_t columns_ = 0, rows_ = 0;

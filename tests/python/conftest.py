@@ -1,11 +1,42 @@
 """Shared fixtures of the Python package's tests (run by CTest through
 pytest; tests/CMakeLists.txt sets the environment)."""
 
+import fcntl
 import os
 import subprocess
 from pathlib import Path
 
 import pytest
+
+
+def _take_a_core():
+    """One core for this test process, as tests/one_core.cpp takes one for
+    the C++ tests under the coverage run (scripts/test.sh): before the
+    package starts its threads, which then number one (TBB's default is the
+    process's cores; no test asks the package for more)."""
+    folder = os.environ.get("PURKINJE_TEST_CORE_LOCKS")
+    if not folder:
+        return None
+    for cpu in sorted(os.sched_getaffinity(0)):
+        try:
+            fd = os.open(os.path.join(folder, f"core-{cpu}.lock"), os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            continue
+        for task in os.listdir("/proc/self/task"):  # every thread, not only this one
+            try:
+                os.sched_setaffinity(int(task), {cpu})
+            except OSError:  # a thread that has ended since
+                pass
+        return fd  # held until the process ends
+    return None
+
+
+_CORE = _take_a_core()
 
 SOURCE_DIR = Path(os.environ["PURKINJE_SOURCE_DIR"])
 EXECUTABLE = os.environ["PURKINJE_EXECUTABLE"]

@@ -7,10 +7,11 @@ each with its labels
 drawn over it (purkinje.figures.draw_labels). Rendered in the fast mode as
 `purkinje render` does by default (1 ray, 16 on edges, sensor noise).
 
-    PYTHONPATH=build/release/python python3 docs/gallery/gallery.py
+    PYTHONPATH=build/release/python python3 docs/gallery/gallery.py [STEM ...]
 
 writes docs/gallery/*.png and the table between the gallery markers of
-docs/rendering.md.
+docs/rendering.md; with stems (`headset_wet`), only those images and
+their rows.
 """
 
 import math
@@ -101,8 +102,8 @@ def entries():
          "glints streak, the labels are mid-exposure's", saccade, 60),
     ]
     # Wet eyes: the sclera's highlights (distractors, cyan squares) where the
-    # eye turns far enough that the sclera mirrors the LEDs, and the lower
-    # lid's tear meniscus's along the lid.
+    # eye turns far enough that the sclera mirrors the LEDs, and the lids'
+    # tear menisci's along the lids.
     wet_remote = with_face(load(r), gaze=(-38, 0))
     wet_remote["eyes"][0]["appearance"]["tear_film"] = {}
     wet_headset = with_face(load(h), gaze=(30, 8))
@@ -123,12 +124,12 @@ def entries():
          browed, 170),
         ("headset_textured", "headset with a face, the skin's albedo textured (wrinkles, pores, blotches; contrast "
          "0.3) and the sclera's vessels (0.5), looking 20 deg aside", textured, None),
-        ("remote_wet", "remote with a face, wet eyes (tear film: 2 deg of roughness, a 0.3 mm lower meniscus), "
-         "looking 38 deg aside: the sclera mirrors both LEDs beside the glints, and so does the lower lid's "
-         "tear meniscus", wet_remote, 60),
+        ("remote_wet", "remote with a face, wet eyes (tear film: 2 deg of roughness, menisci of 0.3 mm on the "
+         "lower lid and 0.25 mm on the upper), looking 38 deg aside: the sclera mirrors both LEDs beside the "
+         "glints, and so do the lids' tear menisci", wet_remote, 60),
         ("headset_wet", "headset with a face, wet eyes, looking 30 deg aside and 8 up, exposed 0.4 ms (at 1 ms "
          "the lit sclera saturates and hides them): the sclera's highlights, wide at 35 mm, and the tear "
-         "meniscus's small ones along the lower lid", wet_headset, None),
+         "menisci's small ones along both lids", wet_headset, None),
     ]
     return bundled, drawn + camera + wet
 
@@ -169,20 +170,28 @@ def draw(stem, caption, d, half, out):
     return f"| ![{stem}](gallery/{stem}.png) | {caption}. Features: {seen}. |"
 
 
-def main():
+def main(stems):
     bundled, drawn = entries()
-    rows = ["| image | what it shows |", "| --- | --- |"]
-    for entry in bundled + drawn:
-        rows.append(draw(*entry, HERE))
-        print(rows[-1], flush=True)
     doc = HERE.parent / "rendering.md"
     text = doc.read_text()
     begin, end = "<!-- gallery: written by docs/gallery/gallery.py -->\n", "<!-- /gallery -->"
     before, rest = text.split(begin)
-    after = rest.split(end)[1]
+    table, after = rest.split(end)
+    unknown = set(stems) - {entry[0] for entry in bundled + drawn}
+    if unknown:
+        print(f"gallery.py: no gallery image named {', '.join(sorted(unknown))}", file=sys.stderr)
+        return 2
+    old_rows = {row.split("](")[0][4:]: row for row in table.splitlines() if row.startswith("| ![")}
+    rows = ["| image | what it shows |", "| --- | --- |"]
+    for entry in bundled + drawn:
+        if stems and entry[0] not in stems:
+            rows.append(old_rows[entry[0]])
+            continue
+        rows.append(draw(*entry, HERE))
+        print(rows[-1], flush=True)
     doc.write_text(before + begin + "\n".join(rows) + "\n" + end + after)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))

@@ -108,6 +108,7 @@ const std::vector<ParameterRule>& scene_rules() {
       {"fundus_reflectance", T::real, 0, 1},
       {"sclera_roughness_deg", T::real, 0, 10},
       {"meniscus_radius_mm", T::real, 0, 1},
+      {"upper_meniscus_radius_mm", T::real, 0, 1},
       {"skin_texture_contrast", T::real, 0, 1},
       {"sclera_vessel_contrast", T::real, 0, 1},
       {"cornea_radius_mm", T::real, 0, 100, true},
@@ -482,7 +483,7 @@ struct Reader {
     for (const char* name : {"lid_opening", "blink", "skin_albedo", "skin_texture_contrast"}) {
       if (given(name) && !lids) where.at(name).fail("", "the scene's first eye has no eyelids (scene-format.md: eyelids)");
     }
-    for (const char* name : {"sclera_roughness_deg", "meniscus_radius_mm"}) {
+    for (const char* name : {"sclera_roughness_deg", "meniscus_radius_mm", "upper_meniscus_radius_mm"}) {
       if (given(name) && !scene.eyes.front().appearance().tear_film) {
         where.at(name).fail("", "the scene's first eye has no tear film (scene-format.md: tear film)");
       }
@@ -774,6 +775,7 @@ Scene scene_for_image(const DatasetSpec& spec, const ImageDraw& image) {
   if (look.tear_film) {
     if (auto v = value("sclera_roughness_deg")) look.tear_film->sclera_roughness_deg = *v;
     if (auto v = value("meniscus_radius_mm")) look.tear_film->meniscus_radius_mm = *v;
+    if (auto v = value("upper_meniscus_radius_mm")) look.tear_film->upper_meniscus_radius_mm = *v;
   }
   if (look.eyelids) {
     if (auto v = value("lid_opening")) look.eyelids->opening = *v;

@@ -189,7 +189,8 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
         const json& kind = r.member(distractors[d], distractor_path, "kind");
         bool known = false;
         for (const DistractorKind k : {DistractorKind::sclera, DistractorKind::tear_meniscus,
-                                       DistractorKind::spectacle_lens_front, DistractorKind::spectacle_lens_back}) {
+                                       DistractorKind::upper_tear_meniscus, DistractorKind::spectacle_lens_front,
+                                       DistractorKind::spectacle_lens_back}) {
           if (kind == to_string(k)) {
             truth.kind = k;
             known = true;
@@ -197,7 +198,8 @@ ImageLabels parse_image_labels(std::string_view text, const std::filesystem::pat
         }
         if (!known) {
           r.fail(distractor_path + ".kind", &kind,
-                 "must be \"sclera\", \"tear_meniscus\", \"spectacle_lens_front\" or \"spectacle_lens_back\"");
+                 "must be \"sclera\", \"tear_meniscus\", \"upper_tear_meniscus\", \"spectacle_lens_front\" or "
+                 "\"spectacle_lens_back\"");
         }
         truth.illuminator = r.integer(distractors[d], distractor_path, "illuminator", 0, lights - 1);
         truth.status = r.status(distractors[d], distractor_path);

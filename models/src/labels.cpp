@@ -172,7 +172,8 @@ json eye_json(const Eye& eye, const EyeTruth& t, int index) {
   if (a.sclera_vessel_contrast != 0) look["sclera_vessel_contrast"] = number(a.sclera_vessel_contrast);
   if (a.tear_film) {
     look["tear_film"] = {{"sclera_roughness_deg", number(a.tear_film->sclera_roughness_deg)},
-                         {"meniscus_radius_mm", number(a.tear_film->meniscus_radius_mm)}};
+                         {"meniscus_radius_mm", number(a.tear_film->meniscus_radius_mm)},
+                         {"upper_meniscus_radius_mm", number(a.tear_film->upper_meniscus_radius_mm)}};
   }
   out["appearance"] = look;
   return out;

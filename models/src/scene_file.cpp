@@ -556,6 +556,7 @@ EyeAppearance read_appearance(Object& e) {
       t.sclera_roughness_deg = film->within_or("sclera_roughness_deg", 0, 10, t.sclera_roughness_deg);
       // Past 1 mm tears run over the lid (epiphora), no meniscus.
       t.meniscus_radius_mm = film->within_or("meniscus_radius_mm", 0, 1, t.meniscus_radius_mm);
+      t.upper_meniscus_radius_mm = film->within_or("upper_meniscus_radius_mm", 0, 1, t.upper_meniscus_radius_mm);
       film->finish();
       a.tear_film = t;
     }
@@ -912,7 +913,8 @@ ordered_json eye_json(const Eye& eye, std::size_t index) {
   if (a.sclera_vessel_contrast != 0) o["appearance"]["sclera_vessel_contrast"] = a.sclera_vessel_contrast;
   if (a.tear_film) {
     o["appearance"]["tear_film"] = {{"sclera_roughness_deg", a.tear_film->sclera_roughness_deg},
-                                    {"meniscus_radius_mm", a.tear_film->meniscus_radius_mm}};
+                                    {"meniscus_radius_mm", a.tear_film->meniscus_radius_mm},
+                                    {"upper_meniscus_radius_mm", a.tear_film->upper_meniscus_radius_mm}};
   }
   // Without lids the head frame places nothing, and the format has none.
   if (a.eyelids) {

@@ -132,6 +132,7 @@ const char* to_string(DistractorKind kind) {
     case DistractorKind::tear_meniscus: return "tear_meniscus";
     case DistractorKind::spectacle_lens_front: return "spectacle_lens_front";
     case DistractorKind::spectacle_lens_back: return "spectacle_lens_back";
+    case DistractorKind::upper_tear_meniscus: return "upper_tear_meniscus";
   }
   return "unknown";
 }

@@ -370,8 +370,8 @@ void image_glints(const Scene& scene, int camera_index, SceneTruth& truth, const
 }
 
 // The highlights of the tear menisci of `camera_index`'s views' eyes,
-// appended to their distractors (after the sclera's) in light order, each
-// light's along the lid.
+// appended to their distractors (after the sclera's): the lower lid's,
+// then the upper's, each in light order and each light's along the lid.
 void add_meniscus_highlights(const Scene& scene, int camera_index, const std::vector<TearMeniscus>& menisci,
                              const TruthOptions& options, SceneTruth& truth) {
   const Camera& camera = scene.cameras[camera_index];
@@ -384,7 +384,7 @@ void add_meniscus_highlights(const Scene& scene, int camera_index, const std::ve
         for (const Reflection& r : meniscus.highlights(light, camera.center())) {
           if (scene.spectacle_lenses.empty()) {
             view.distractors.push_back(
-                distractor_truth(DistractorKind::tear_meniscus, r, scene, eye, l, camera, options));
+                distractor_truth(meniscus_kind(meniscus.lid()), r, scene, eye, l, camera, options));
             continue;
           }
           // Through the lenses: the same circle's highlight, found again
@@ -396,7 +396,7 @@ void add_meniscus_highlights(const Scene& scene, int camera_index, const std::ve
           });
           if (seen.reflection.status != PathStatus::ok) continue;
           view.distractors.push_back(
-              distractor_truth(DistractorKind::tear_meniscus, seen, scene, eye, l, camera, options));
+              distractor_truth(meniscus_kind(meniscus.lid()), seen, scene, eye, l, camera, options));
         }
       }
     }
@@ -439,7 +439,7 @@ void image_distractors(const Scene& scene, int camera_index, const std::vector<T
           image.radiometry = ghost_radiometry(scene.spectacle_lenses[d.spectacle_lens], surface, led, camera);
         } else {
           const auto meniscus = std::find_if(menisci.begin(), menisci.end(),
-                                             [&](const TearMeniscus& m) { return m.eye() == view.eye; });
+                                             [&](const TearMeniscus& m) { return m.eye() == view.eye && meniscus_kind(m.lid()) == d.kind; });
           // Only this render's menisci label such highlights.
           image.radiometry = meniscus == menisci.end()
                                  ? failed_radiometry(PathStatus::not_converged)
@@ -803,13 +803,21 @@ void render(const Scene& scene, int camera_index, const RenderOptions& options, 
     // Each view's distractors: the mid-exposure instant's, and as at the
     // nearest instant those it has not; in each instant's order: the
     // sclera's by light, the lenses' ghosts by lens, surface and light,
-    // the menisci's by light and along the lid (head-frame x).
+    // the lower lid's meniscus's by light and along the lid (head-frame x),
+    // then the upper's.
     const auto along_lid = [&](const HighlightTrack& t) {
-      if (t.kind != DistractorKind::tear_meniscus) return 0.0;
+      if (t.kind != DistractorKind::tear_meniscus && t.kind != DistractorKind::upper_tear_meniscus) return 0.0;
       return (head_placement(scene, t.eye).world_from_head.inverse() * t.nearest.truth.reflection.point).x;
     };
     const auto rank = [](DistractorKind kind) {
-      return kind == DistractorKind::sclera ? 0 : kind == DistractorKind::tear_meniscus ? 2 : 1;
+      switch (kind) {
+        case DistractorKind::sclera: return 0;
+        case DistractorKind::spectacle_lens_front:
+        case DistractorKind::spectacle_lens_back: return 1;
+        case DistractorKind::tear_meniscus: return 2;
+        case DistractorKind::upper_tear_meniscus: return 3;
+      }
+      return 4;
     };
     std::vector<std::tuple<int, int, int, DistractorKind, int, double, std::size_t>> order;
     for (std::size_t t = 0; t < tracks.size(); ++t) {

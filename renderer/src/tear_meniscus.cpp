@@ -34,19 +34,24 @@ constexpr double kFissureReach = 0.9;
 
 Vector3 unit(const Vector3& v) { return v / v.norm(); }
 
+// Which way the opening lies from a lid's margin: +y above the lower
+// lid's, -y below the upper lid's.
+double opening_side(Lid lid) { return lid == Lid::lower ? 1.0 : -1.0; }
+
 // The wall at x: the margin's height and slope (a central difference) and
-// the wall's unit normal into the opening (+y), as build() and frame()
-// must both have them, to the bit.
+// the wall's unit normal into the opening, as build() and frame() must
+// both have them, to the bit.
 struct Wall {
   double m = 0, m1 = 0, w = 1, nx = 0, ny = 1;
 };
-Wall wall_at(const std::function<double(double)>& margin, double x) {
+Wall wall_at(const std::function<double(double)>& margin, Lid lid, double x) {
   Wall out;
   out.m = margin(x);
   out.m1 = (margin(x + kSlopeStepMm) - margin(x - kSlopeStepMm)) / (2 * kSlopeStepMm);
   out.w = std::sqrt(1 + out.m1 * out.m1);
-  out.nx = -out.m1 / out.w;
-  out.ny = 1 / out.w;
+  const double side = opening_side(lid);
+  out.nx = -side * out.m1 / out.w;
+  out.ny = side / out.w;
   return out;
 }
 
@@ -100,12 +105,13 @@ struct TearMeniscus::Frame {
   double theta_globe = 0;  // the angle of N where it touches the shell, from U toward V
 };
 
-std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_head, double radius_mm,
+std::optional<TearMeniscus> TearMeniscus::build(int eye, Lid lid, const Pose& world_from_head, double radius_mm,
                                                 std::function<double(double)> margin_mm, const ShellOffset& shell,
                                                 double x_lo, double x_hi) {
   if (!(x_hi > x_lo) || !(radius_mm > 0)) return std::nullopt;
   TearMeniscus out;
   out.eye_ = eye;
+  out.lid_ = lid;
   out.world_from_head_ = world_from_head;
   out.head_from_world_ = world_from_head.inverse();
   out.r_ = radius_mm;
@@ -118,7 +124,7 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
   std::vector<Vector3> to_centre(count, Vector3{0, 0, 0});
   for (int i = 0; i < count; ++i) {
     const double x = x_lo + i * step;
-    const Wall wall = wall_at(out.margin_, x);
+    const Wall wall = wall_at(out.margin_, lid, x);
     const double X = x + r * wall.nx, Y = wall.m + r * wall.ny;
     centre_x[i] = X;
     z[i] = touching_height(shell, X, Y, r);
@@ -168,7 +174,7 @@ std::optional<TearMeniscus> TearMeniscus::build(int eye, const Pose& world_from_
 TearMeniscus::Frame TearMeniscus::frame(double x) const {
   Frame f;
   if (!(x >= wall_lo_ && x <= wall_hi_)) return f;
-  const Wall wall = wall_at(margin_, x);
+  const Wall wall = wall_at(margin_, lid_, x);
   const double m = wall.m, m1 = wall.m1, w = wall.w, nx = wall.nx, ny = wall.ny;
   const double k = kCurvatureStepMm;
   const double m2 = (margin_(x + k) - 2 * m + margin_(x - k)) / (k * k);
@@ -182,9 +188,10 @@ TearMeniscus::Frame TearMeniscus::frame(double x) const {
   const double Z = (z2_[i] * u * u * u + z2_[i + 1] * t * t * t) / (6 * span) + a * u + b * t;
   const double dZ = (z2_[i + 1] * t * t - z2_[i] * u * u) / (2 * span) + b - a;  // dZ/dX
   f.c = Point3{X, m + r_ * ny, Z};
-  // c' is (1 - r m'' / w^3) (1, m', dZ/dX) along the wall: the wall's
-  // normal turns along it and stays perpendicular to c'.
-  if (!(1 - r_ * m2 / (w * w * w) > 0)) return f;  // the wall curves tighter than r: no fillet
+  // c' is (1 - r k) (1, m', dZ/dX) along the wall, k = +-m'' / w^3 its
+  // curvature toward the opening: the wall's normal turns along it and
+  // stays perpendicular to c'.
+  if (!(1 - r_ * opening_side(lid_) * m2 / (w * w * w) > 0)) return f;  // the wall curves tighter than r: no fillet
   f.T = UnitVector3::normalize(Vector3{1, m1, dZ});
   f.U = UnitVector3::normalize(Vector3{nx, ny, 0});
   f.V = UnitVector3::normalize(cross(f.T, f.U));
@@ -446,31 +453,41 @@ std::vector<TearMeniscus> build_tear_menisci(const Scene& scene) {
   for (int i = 0; i < static_cast<int>(scene.eyes.size()); ++i) {
     const Eye& eye = scene.eyes[i];
     const EyeAppearance& look = eye.appearance();
-    if (!look.face || !look.eyelids || !look.tear_film || !(look.tear_film->meniscus_radius_mm > 0)) continue;
-    const double R = eye.model().sclera_radius_mm, r = look.tear_film->meniscus_radius_mm;
+    if (!look.face || !look.eyelids || !look.tear_film) continue;
+    const double R = eye.model().sclera_radius_mm;
     const HeadPlacement head = head_placement(scene, i);
     // Copies: the meniscus may outlive this scene's eye.
     const auto margins = [lids = *look.eyelids, face = *look.face, R, turns = head.turns](double x) {
       return fissure_margins(lids, face, R, turns, x);
     };
-    // Along the fissure, where the margins stand apart by more than the
-    // meniscus's width: the run about the middle.
     const Face& face = *look.face;
     const double nasal = face.side == EyeSide::right ? 1.0 : -1.0;
     const double a = -nasal * kFissureReach * face.lateral_canthus_mm;
     const double b = nasal * kFissureReach * look.eyelids->half_width_mm;
+    const double lower_r = look.tear_film->meniscus_radius_mm, upper_r = look.tear_film->upper_meniscus_radius_mm;
+    // Along the fissure, where the margins stand apart by more than twice
+    // the menisci's widths together (they would meet): the run about the
+    // middle, for both.
     const auto open = [&](double x) {
       const FissureMargins m = margins(x);
-      return m.upper_mm - m.lower_mm > 2 * r;
+      return m.upper_mm - m.lower_mm > 2 * (lower_r + upper_r);
     };
     if (!open(0)) continue;
     double x_lo = 0, x_hi = 0;
     while (x_lo - kScanStepMm >= std::min(a, b) && open(x_lo - kScanStepMm)) x_lo -= kScanStepMm;
     while (x_hi + kScanStepMm <= std::max(a, b) && open(x_hi + kScanStepMm)) x_hi += kScanStepMm;
-    std::optional<TearMeniscus> meniscus =
-        TearMeniscus::build(i, head.world_from_head, r, [margins](double x) { return margins(x).lower_mm; },
-                            eye_shell_offset(eye, head.world_from_head), x_lo, x_hi);
-    if (meniscus) out.push_back(std::move(*meniscus));
+    const ShellOffset shell = eye_shell_offset(eye, head.world_from_head);
+    for (const Lid lid : {Lid::lower, Lid::upper}) {
+      const double r = lid == Lid::lower ? lower_r : upper_r;
+      if (!(r > 0)) continue;
+      const auto margin = [margins, lid](double x) {
+        const FissureMargins m = margins(x);
+        return lid == Lid::lower ? m.lower_mm : m.upper_mm;
+      };
+      std::optional<TearMeniscus> meniscus =
+          TearMeniscus::build(i, lid, head.world_from_head, r, margin, shell, x_lo, x_hi);
+      if (meniscus) out.push_back(std::move(*meniscus));
+    }
   }
   return out;
 }

@@ -1,18 +1,20 @@
 #pragma once
-// The lower lid's tear meniscus (TearFilm::meniscus_radius_mm), internal
-// to renderer/: modelled for its highlights, the LEDs' images in its
-// concave strip of tears, which glint detectors may take for glints.
+// A lid's tear meniscus (TearFilm::meniscus_radius_mm for the lower lid,
+// upper_meniscus_radius_mm for the upper), internal to renderer/:
+// modelled for its highlights, the LEDs' images in its concave strip of
+// tears, which glint detectors may take for glints.
 //
 // Geometry, in the head frame of face_mesh.h (origin at the centre of
 // rotation, y up, z out of the face). The lid margin's posterior face is
 // the wall {(x, m(x), z)}, vertical as the face mesh's margin is where it
-// leaves the globe (m: the lower margin's height, fissure_margins). The
+// leaves the globe (m: the margin's height, fissure_margins). The
 // globe is the eye's outer shell as traced: the corneal cap, the limbal
 // band, the sclera's sphere. The meniscus is the fillet of radius r
 // between the two: the envelope of the spheres of radius r that touch
 // both, whose centres run along
 //   c(x) = ((x, m(x)) + r n(x), Z(x)),
-// n the wall's unit normal into the opening (in the xy plane), Z where the
+// n the wall's unit normal into the opening (in the xy plane: up from the
+// lower lid, down from the upper), Z where the
 // sphere touches the shell from outside: found at nodes 0.1 mm apart along
 // x (sphere tracing down the head's z) and joined by a cubic spline over
 // the centres' x, so that the meniscus is smooth where the shell is not
@@ -44,6 +46,7 @@
 #include "purkinje/models/rotation.h"
 #include "purkinje/models/scene.h"
 #include "purkinje/models/specular.h"
+#include "purkinje/models/truth.h"
 #include "purkinje/renderer/radiometry.h"
 
 namespace purkinje::renderer {
@@ -52,18 +55,26 @@ namespace purkinje::renderer {
 // point outside it (head frame).
 using ShellOffset = std::function<Vector3(const Point3& head_point)>;
 
+// Which lid's margin a meniscus lies along.
+enum class Lid { lower, upper };
+// Its highlights' kind in the labels.
+inline DistractorKind meniscus_kind(Lid lid) {
+  return lid == Lid::lower ? DistractorKind::tear_meniscus : DistractorKind::upper_tear_meniscus;
+}
+
 class TearMeniscus {
  public:
   // The meniscus along [x_lo, x_hi] (head-frame x), or the run of it about
   // the middle where the fillet exists (its sphere touches the shell in
   // front of the wall's foot); nullopt when it exists nowhere.
-  // `margin_mm(x)`: the lower margin's height, smooth over the range and
+  // `margin_mm(x)`: `lid`'s margin's height, smooth over the range and
   // 0.02 mm past it; `eye` indexes scene.eyes.
-  static std::optional<TearMeniscus> build(int eye, const Pose& world_from_head, double radius_mm,
+  static std::optional<TearMeniscus> build(int eye, Lid lid, const Pose& world_from_head, double radius_mm,
                                            std::function<double(double)> margin_mm, const ShellOffset& shell,
                                            double x_lo, double x_hi);
 
   int eye() const { return eye_; }
+  Lid lid() const { return lid_; }
   double radius_mm() const { return r_; }
 
   // Every highlight of a point light at `source` seen from `target`
@@ -97,6 +108,7 @@ class TearMeniscus {
   bool on_surface(const Point3& head_point) const;
 
   int eye_ = 0;
+  Lid lid_ = Lid::lower;
   Pose world_from_head_, head_from_world_;
   double r_ = 0;
   std::function<double(double)> margin_;
@@ -121,7 +133,7 @@ GlintRadiometry meniscus_highlight_radiometry(const TearMeniscus& meniscus, cons
                                               const Scene* lenses = nullptr);
 
 // The tear menisci of `scene`'s eyes that have a face and a tear film
-// with a meniscus, in eye order.
+// with menisci: by eye, the lower lid's before the upper's.
 std::vector<TearMeniscus> build_tear_menisci(const Scene& scene);
 
 }  // namespace purkinje::renderer

@@ -123,6 +123,7 @@ constexpr DocumentedRange kDocumentedRanges[] = {
     {"sclera_albedo", 0, 1, false},           {"skin_albedo", 0, 1, false},
     {"fundus_reflectance", 0, 1, false},      {"cornea_radius_mm", 0, 100, true},
     {"sclera_roughness_deg", 0, 10, false},   {"meniscus_radius_mm", 0, 1, false},   {"skin_texture_contrast", 0, 1, false},
+    {"upper_meniscus_radius_mm", 0, 1, false},
     {"sclera_vessel_contrast", 0, 1, false},
     {"cornea_asphericity", -1, 10, false},    {"kappa_horizontal_deg", -45, 45, false},
     {"kappa_vertical_deg", -45, 45, false},   {"rotation_center_depth_mm", 0, 100, true},

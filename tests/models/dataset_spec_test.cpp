@@ -396,13 +396,15 @@ TEST(DatasetSpec, TheBrowParametersReachTheFirstEyesBrows) {
 
 TEST(DatasetSpec, TheTearFilmsRoughnessAndMeniscusReachTheFirstEye) {
   const DatasetSpec spec = parse_dataset_spec(R"({"dataset_format": 1, "scene": "../scenes/hard/headset_wet.json",
-      "count": 10, "parameters": {"sclera_roughness_deg": {"uniform": [0, 6]}, "meniscus_radius_mm": {"uniform": [0.2, 0.4]}}})",
+      "count": 10, "parameters": {"sclera_roughness_deg": {"uniform": [0, 6]}, "meniscus_radius_mm": {"uniform": [0.2, 0.4]},
+      "upper_meniscus_radius_mm": {"uniform": [0.1, 0.3]}}})",
                                               "f.json", kFolder);
   for (std::uint64_t k : {0u, 7u}) {
     const ImageDraw d = draw_image(spec, k);
     const Scene scene = scene_for_image(spec, d);
     EXPECT_EQ(scene.eyes[0].appearance().tear_film->sclera_roughness_deg, column(spec, d, "sclera_roughness_deg"));
     EXPECT_EQ(scene.eyes[0].appearance().tear_film->meniscus_radius_mm, column(spec, d, "meniscus_radius_mm"));
+    EXPECT_EQ(scene.eyes[0].appearance().tear_film->upper_meniscus_radius_mm, column(spec, d, "upper_meniscus_radius_mm"));
   }
 }
 
@@ -494,6 +496,7 @@ const Malformed kMalformed[] = {
     {R"("parameters": {"sclera_roughness_deg": 12})", "parameters.sclera_roughness_deg = 12: must be in [0, 10] (sclera_roughness_deg)"},
     {R"("parameters": {"meniscus_radius_mm": 0.3})", "parameters.meniscus_radius_mm: the scene's first eye has no tear film (scene-format.md: tear film)"},
     {R"("parameters": {"meniscus_radius_mm": 2})", "parameters.meniscus_radius_mm = 2: must be in [0, 1] (meniscus_radius_mm)"},
+    {R"("parameters": {"upper_meniscus_radius_mm": 0.2})", "parameters.upper_meniscus_radius_mm: the scene's first eye has no tear film (scene-format.md: tear film)"},
     {R"("parameters": {"midline_mm": 30})", "parameters.midline_mm = 30: unknown key"},
     {R"("parameters": {"iris_albedo": {"grid": {"from": 0.1, "to": 0.2, "steps": 0}}})", "parameters.iris_albedo.grid.steps = 0: must be in [1, 1000000]"},
     {R"("parameters": {"illuminators": {"led_middle": {"on": false}}})", "parameters.illuminators.led_middle = {...}: unknown key (valid keys here: led_left, led_right)"},

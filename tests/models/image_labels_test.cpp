@@ -145,7 +145,7 @@ TEST(ImageLabels, ReadsAWetEyesDistractorsAndNamesABadOne) {
 
   nlohmann::json j = good;
   j["views"][0]["distractors"][1]["kind"] = "lens";
-  expect_error(j, "views[0].distractors[1].kind = \"lens\"", "must be \"sclera\", \"tear_meniscus\", \"spectacle_lens_front\" or \"spectacle_lens_back\"");
+  expect_error(j, "views[0].distractors[1].kind = \"lens\"", "must be \"sclera\", \"tear_meniscus\", \"upper_tear_meniscus\", \"spectacle_lens_front\" or \"spectacle_lens_back\"");
   j = good;
   j["views"][0]["distractors"][0]["illuminator"] = 8;
   expect_error(j, "views[0].distractors[0].illuminator = 8", "integer in [0, 7]");

@@ -740,15 +740,18 @@ TEST(SceneFile, ReadsTheIrisFurrowsAndFrecklesAndWritesThemBackOnlyWhenOn) {
 
 TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
   const Scene scene = parse_scene(
-      eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5, "meniscus_radius_mm": 0.25 } })"),
+      eye_with(R"("appearance": { "tear_film": { "sclera_roughness_deg": 3.5, "meniscus_radius_mm": 0.25,
+                                                     "upper_meniscus_radius_mm": 0.2 } })"),
       "s.json");
   ASSERT_TRUE(scene.eyes[0].appearance().tear_film);
   EXPECT_EQ(scene.eyes[0].appearance().tear_film->sclera_roughness_deg, 3.5);
   EXPECT_EQ(scene.eyes[0].appearance().tear_film->meniscus_radius_mm, 0.25);
+  EXPECT_EQ(scene.eyes[0].appearance().tear_film->upper_meniscus_radius_mm, 0.2);
   const Scene back = parse_scene(scene_to_json(scene), "back.json");
   ASSERT_TRUE(back.eyes[0].appearance().tear_film);
   EXPECT_EQ(back.eyes[0].appearance().tear_film->sclera_roughness_deg, 3.5);
   EXPECT_EQ(back.eyes[0].appearance().tear_film->meniscus_radius_mm, 0.25);
+  EXPECT_EQ(back.eyes[0].appearance().tear_film->upper_meniscus_radius_mm, 0.2);
   // {} is every default; without it, a dry sclera, and none written.
   EXPECT_EQ(parse_scene(eye_with(R"("appearance": { "tear_film": {} })"), "s.json").eyes[0].appearance().tear_film->sclera_roughness_deg,
             TearFilm{}.sclera_roughness_deg);
@@ -762,6 +765,7 @@ TEST(SceneFile, ReadsTheTearFilmAndWritesItBack) {
       {R"({ "meniscus": 1 })", "eyes[0].appearance.tear_film.meniscus = 1: unknown key"},
       {R"({ "meniscus_radius_mm": 1.5 })", "eyes[0].appearance.tear_film.meniscus_radius_mm = 1.5: must be between 0 and 1"},
       {R"({ "meniscus_radius_mm": -0.1 })", "eyes[0].appearance.tear_film.meniscus_radius_mm = -0.1: must be between 0 and 1"},
+      {R"({ "upper_meniscus_radius_mm": 1.2 })", "eyes[0].appearance.tear_film.upper_meniscus_radius_mm = 1.2: must be between 0 and 1"},
       {R"(2)", "eyes[0].appearance.tear_film = 2: must be an object"},
   };
   for (const auto& [film, expected] : bad) {

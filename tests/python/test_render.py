@@ -233,8 +233,8 @@ def test_a_wet_faces_tear_meniscus_highlights_are_labelled_and_imaged():
     assert len(seen) >= 2
     share = float((result.aov("distractor") * result.electrons).sum())
     assert share == pytest.approx(sum(x["electrons"] for x in result.distractors), rel=1e-4)
-    # Without a meniscus, the sclera's highlights alone.
-    d["eyes"][0]["appearance"]["tear_film"] = {"meniscus_radius_mm": 0}
+    # Without menisci, the sclera's highlights alone.
+    d["eyes"][0]["appearance"]["tear_film"] = {"meniscus_radius_mm": 0, "upper_meniscus_radius_mm": 0}
     flat = purkinje.render(purkinje.parse_scene(d), noise=False)
     assert all(x.kind == "sclera" for x in flat.labels.views[0].distractors)
 

@@ -1,8 +1,10 @@
-// The lower lid's tear meniscus: its highlights on a straight margin (a
-// torus: the fillet's centres run on a circle about the head's vertical
-// axis) against the law of reflection on the fillet's circle solved by
-// hand, its power against Coddington's equations, and in rendered images
-// where the labels put them with the electrons they give.
+// The lids' tear menisci: their highlights on a straight margin (a torus:
+// the fillet's centres run on a circle about the head's vertical axis)
+// against the law of reflection on the fillet's circle solved by hand,
+// their power against Coddington's equations, and in rendered images
+// where the labels put them with the electrons they give. The upper lid's
+// cases are the lower's mirrored top to bottom (y to -y), the hand
+// solutions with them.
 
 #include <gtest/gtest.h>
 
@@ -22,30 +24,40 @@ namespace purkinje::renderer {
 namespace {
 
 constexpr double kGlobe = 12.0, kRadius = 0.3, kMargin = -6.0;
+constexpr Lid kLids[] = {Lid::lower, Lid::upper};
 
-// Head frame = world; the margin at y = -6 along the whole lid, on a
-// globe that is a sphere of radius 12 about the origin.
-TearMeniscus straight_meniscus() {
-  const ShellOffset sphere = [](const Point3& p) {
-    const Vector3 v = p.from_origin();
-    return v - v * (kGlobe / v.norm());
-  };
-  return TearMeniscus::build(0, Pose(), kRadius, [](double) { return kMargin; }, sphere, -8, 8).value();
+// +1 for the lower lid, -1 for the upper: the lower lid's case mirrored.
+double sign(Lid lid) { return lid == Lid::lower ? 1.0 : -1.0; }
+Point3 mirrored(Lid lid, const Point3& p) { return {p.x, sign(lid) * p.y, p.z}; }
+Vector3 mirrored(Lid lid, const Vector3& v) { return {v.x, sign(lid) * v.y, v.z}; }
+const char* name(Lid lid) { return lid == Lid::lower ? "lower" : "upper"; }
+
+const ShellOffset kSphere = [](const Point3& p) {
+  const Vector3 v = p.from_origin();
+  return v - v * (kGlobe / v.norm());
+};
+
+// Head frame = world; the margin at y = -6 (the upper lid's at +6) along
+// the whole lid, on a globe that is a sphere of radius 12 about the origin.
+TearMeniscus straight_meniscus(Lid lid) {
+  const double margin = sign(lid) * kMargin;
+  return TearMeniscus::build(0, lid, Pose(), kRadius, [margin](double) { return margin; }, kSphere, -8, 8).value();
 }
 
-// The fillet's circle in the plane x = 0: centre r above the wall and
-// r out of the globe.
-Point3 circle_centre() {
-  const double y = kMargin + kRadius;
+// The fillet's circle in the plane x = 0: centre r into the opening from
+// the wall and r out of the globe.
+Point3 circle_centre(Lid lid) {
+  const double y = sign(lid) * (kMargin + kRadius);
   return {0, y, std::sqrt((kGlobe + kRadius) * (kGlobe + kRadius) - y * y)};
 }
 
 // The point on the circle (in the plane x = 0) that mirrors `source` to
 // `target` (both in that plane), by bisection on the angle between the
 // normal and the two directions, from the wall's contact toward the globe's.
-Point3 mirror_point_by_hand(const Point3& source, const Point3& target) {
-  const Point3 c = circle_centre();
-  const double wall = std::atan2(1.0, 0.0);  // N = +y at the wall, as the angle of N in the (z, y) plane
+Point3 mirror_point_by_hand(Lid lid, const Point3& source, const Point3& target) {
+  const Point3 c = circle_centre(lid);
+  // N = +y at the lower wall (-y at the upper), as the angle of N in the (z, y) plane.
+  const double wall = std::atan2(sign(lid), 0.0);
   const Vector3 g = c.from_origin() / c.from_origin().norm();
   const double globe = std::atan2(g.y, g.z);
   const auto point = [&](double a) {
@@ -68,23 +80,26 @@ Point3 mirror_point_by_hand(const Point3& source, const Point3& target) {
 }
 
 TEST(TearMeniscus, MirrorsTheLightWhereTheLawOfReflectionHoldsOnTheFillet) {
-  const TearMeniscus meniscus = straight_meniscus();
+  for (const Lid lid : kLids) {
+  const TearMeniscus meniscus = straight_meniscus(lid);
+  EXPECT_EQ(meniscus.lid(), lid);
   // Light and camera in the plane x = 0, in front and below (as a
   // headset's) or level (as a remote tracker's): the highlight lies where
   // the margin crosses that plane, by symmetry.
-  for (const auto& [source, target] : {std::pair{Point3{0, -20, 40}, Point3{0, -12, 45}},
-                                       std::pair{Point3{0, -300, 600}, Point3{0, -150, 600}},
-                                       std::pair{Point3{0, -30, 20}, Point3{0, 5, 40}}}) {
+  for (const auto& [below_source, below_target] : {std::pair{Point3{0, -20, 40}, Point3{0, -12, 45}},
+                                                   std::pair{Point3{0, -300, 600}, Point3{0, -150, 600}},
+                                                   std::pair{Point3{0, -30, 20}, Point3{0, 5, 40}}}) {
+    const Point3 source = mirrored(lid, below_source), target = mirrored(lid, below_target);
     const std::vector<Reflection> found = meniscus.highlights(source, target);
-    ASSERT_EQ(found.size(), 1u) << source.z;
+    ASSERT_EQ(found.size(), 1u) << name(lid) << source.z;
     const Reflection& r = found[0];
     EXPECT_EQ(r.status, PathStatus::ok);
     EXPECT_NEAR(r.point.x, 0, 1e-10);
-    const Point3 expected = mirror_point_by_hand(source, target);
-    EXPECT_LT(distance(r.point, expected), 1e-9) << source.z;
+    const Point3 expected = mirror_point_by_hand(lid, source, target);
+    EXPECT_LT(distance(r.point, expected), 1e-9) << name(lid) << source.z;
     // On the circle, its normal toward the centre.
-    EXPECT_NEAR(distance(r.point, circle_centre()), kRadius, 1e-12);
-    EXPECT_LT(distance(r.point + r.normal.vector() * kRadius, circle_centre()), 1e-12);
+    EXPECT_NEAR(distance(r.point, circle_centre(lid)), kRadius, 1e-12);
+    EXPECT_LT(distance(r.point + r.normal.vector() * kRadius, circle_centre(lid)), 1e-12);
     // The directions and the incidence as labelled.
     EXPECT_LT((r.incident.vector() - (r.point - source) / (r.point - source).norm()).norm(), 1e-12);
     EXPECT_NEAR(std::cos(r.incidence_rad), dot(r.normal, r.reflected), 1e-12);
@@ -93,28 +108,33 @@ TEST(TearMeniscus, MirrorsTheLightWhereTheLawOfReflectionHoldsOnTheFillet) {
     const Reflection again = meniscus.highlight_near(meniscus.circle_of(r.point + Vector3{0.2, 0, 0}), source, target);
     EXPECT_LT(distance(again.point, r.point), 1e-10);
   }
+  }
 }
 
 TEST(TearMeniscus, HasNoHighlightWhereTheBisectorLeavesTheFilletsArc) {
-  const TearMeniscus meniscus = straight_meniscus();
-  // From above and behind the wall's normal (+y): the bisector points
-  // up past the wall's contact; from straight below, past the globe's.
-  EXPECT_TRUE(meniscus.highlights({0, 40, 5}, {0, 60, 10}).empty());
-  EXPECT_TRUE(meniscus.highlights({0, -60, -5}, {0, -50, -2}).empty());
+  for (const Lid lid : kLids) {
+    const TearMeniscus meniscus = straight_meniscus(lid);
+    // From past the wall's normal (+y at the lower lid) and behind: the
+    // bisector points past the wall's contact; from straight across, past
+    // the globe's.
+    EXPECT_TRUE(meniscus.highlights(mirrored(lid, Point3{0, 40, 5}), mirrored(lid, Point3{0, 60, 10})).empty());
+    EXPECT_TRUE(meniscus.highlights(mirrored(lid, Point3{0, -60, -5}), mirrored(lid, Point3{0, -50, -2})).empty());
+  }
 }
 
 TEST(TearMeniscus, ItsHighlightsPowerIsCoddingtonsForTheTorus) {
-  const TearMeniscus meniscus = straight_meniscus();
-  const Illuminator led{"led", {0, -20, 40}, 0.3, 850, 0};
-  const Point3 centre{0, -12, 45};
+  for (const Lid lid : kLids) {
+  const TearMeniscus meniscus = straight_meniscus(lid);
+  const Illuminator led{"led", mirrored(lid, Point3{0, -20, 40}), 0.3, 850, 0};
+  const Point3 centre = mirrored(lid, Point3{0, -12, 45});
   const Reflection first = meniscus.highlights(led.position, centre).at(0);
   // A camera aimed at the highlight: its aperture faces the reflected ray.
   Sensor sensor;
   sensor.pixel_pitch_mm = 0.006;
   const Camera camera("cam", Intrinsics::from_focal_length(16, 0.006, 640, 480), {},
-                      camera_looking_at(centre, first.point, {0, -1, 0}), sensor);
+                      camera_looking_at(centre, first.point, mirrored(lid, Vector3{0, -1, 0})), sensor);
   const std::vector<Reflection> found = meniscus.highlights(led.position, camera.center());
-  ASSERT_EQ(found.size(), 1u);
+  ASSERT_EQ(found.size(), 1u) << name(lid);
   const Reflection& r = found[0];
   const GlintRadiometry g = meniscus_highlight_radiometry(meniscus, led, camera, r);
   ASSERT_EQ(g.status, PathStatus::ok);
@@ -139,19 +159,21 @@ TEST(TearMeniscus, ItsHighlightsPowerIsCoddingtonsForTheTorus) {
                           omega_per_area * 0.25 * std::numbers::pi * aperture * aperture;
   // The meniscus is the pipe about a spline through the fillet's centres
   // 0.1 mm apart: its curvature along the lid is the torus's to about 1e-5.
-  EXPECT_NEAR(g.power_w / expected, 1, 1e-4);
+  EXPECT_NEAR(g.power_w / expected, 1, 1e-4) << name(lid);
   EXPECT_NEAR(g.fresnel, fresnel_reflectance(cos_i, 1.0, kTearFilmIndex), 1e-15);
+  }
 }
 
-// The headset face with a wet eye, its lower lid lowered off the cornea
-// (the meniscus lies on the globe's sphere) and every albedo 0: only
-// glints and highlights light the image; no lashes.
+// The headset face with a wet eye, its lids opened off the cornea (the
+// menisci lie on the globe's sphere) and every albedo 0: only glints and
+// highlights light the image; no lashes.
 Scene wet_dark_face() {
   Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_face.json");
   EyeAppearance look = scene.eyes[0].appearance();
   look.iris_albedo = look.sclera_albedo = look.skin_albedo = look.fundus_reflectance = 0;
   look.tear_film = TearFilm{};
   look.eyelids->lower_margin_mm = -7.5;
+  look.eyelids->upper_margin_mm = 7.0;
   look.face->lashes.reset();
   scene.eyes[0].set_appearance(look);
   return scene;
@@ -186,24 +208,29 @@ TEST(TearMeniscusHighlights, LieWhereTheLabelsSayWithTheirElectrons) {
   const ImagePlane& e = result.electrons;
 
   // Every highlight's light in the image is what its label gives.
-  int seen = 0;
-  for (const DistractorTruth& d : truth) seen += d.kind == DistractorKind::tear_meniscus && d.status == PathStatus::ok;
-  ASSERT_GE(seen, 2);
+  const auto meniscus = [](const DistractorTruth& d) {
+    return d.kind == DistractorKind::tear_meniscus || d.kind == DistractorKind::upper_tear_meniscus;
+  };
+  for (const DistractorKind kind : {DistractorKind::tear_meniscus, DistractorKind::upper_tear_meniscus}) {
+    int seen = 0;
+    for (const DistractorTruth& d : truth) seen += d.kind == kind && d.status == PathStatus::ok;
+    ASSERT_GE(seen, 2) << to_string(kind);
+  }
   EXPECT_NEAR(imaged_over_labelled(result), 1, 1e-4);
 
   // Each seen meniscus highlight's centroid (its mask's light within 4 px,
   // the point spread's reach) is its label's pixel; those alone there.
-  int alone = 0;
+  int alone[2] = {0, 0};
   for (std::size_t k = 0; k < truth.size(); ++k) {
     const DistractorTruth& d = truth[k];
-    if (d.kind != DistractorKind::tear_meniscus || d.status != PathStatus::ok) continue;
+    if (!meniscus(d) || d.status != PathStatus::ok) continue;
     bool crowded = false;
     for (std::size_t j = 0; j < truth.size(); ++j) {
       crowded |= j != k && truth[j].status == PathStatus::ok &&
                  std::hypot(truth[j].pixel.u - d.pixel.u, truth[j].pixel.v - d.pixel.v) < 10;
     }
     if (crowded) continue;
-    ++alone;
+    ++alone[d.kind == DistractorKind::upper_tear_meniscus];
     double sum = 0, su = 0, sv = 0;
     for (int y = static_cast<int>(d.pixel.v) - 4; y <= static_cast<int>(d.pixel.v) + 4; ++y) {
       for (int x = static_cast<int>(d.pixel.u) - 4; x <= static_cast<int>(d.pixel.u) + 4; ++x) {
@@ -217,7 +244,8 @@ TEST(TearMeniscusHighlights, LieWhereTheLabelsSayWithTheirElectrons) {
     EXPECT_NEAR(su / sum, d.pixel.u, 0.02) << d.illuminator;
     EXPECT_NEAR(sv / sum, d.pixel.v, 0.02) << d.illuminator;
   }
-  EXPECT_GE(alone, 2);
+  EXPECT_GE(alone[0], 2);
+  EXPECT_GE(alone[1], 2);
 }
 
 TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactFillet) {
@@ -227,16 +255,16 @@ TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactF
   // plane x = 0: each highlight found lies r from that curve, and the
   // normal from its nearest centre bisects the directions to the light and
   // the camera.
+  // The upper lid's margin is the mirror image, 6 - 0.02 x^2.
+  for (const Lid lid : kLids) {
   const auto margin = [](double x) { return kMargin + 0.02 * x * x; };
-  const ShellOffset sphere = [](const Point3& p) {
-    const Vector3 v = p.from_origin();
-    return v - v * (kGlobe / v.norm());
-  };
-  const TearMeniscus meniscus = TearMeniscus::build(0, Pose(), kRadius, margin, sphere, -9, 9).value();
+  const double s = sign(lid);
+  const TearMeniscus meniscus =
+      TearMeniscus::build(0, lid, Pose(), kRadius, [&](double x) { return s * margin(x); }, kSphere, -9, 9).value();
   const auto centre = [&](double x) {
     const double m1 = 0.04 * x, w = std::sqrt(1 + m1 * m1);
     const double X = x - kRadius * m1 / w, Y = margin(x) + kRadius / w;
-    return Point3{X, Y, std::sqrt((kGlobe + kRadius) * (kGlobe + kRadius) - X * X - Y * Y)};
+    return mirrored(lid, Point3{X, Y, std::sqrt((kGlobe + kRadius) * (kGlobe + kRadius) - X * X - Y * Y)});
   };
   // Also a light and a camera either side of the fillet's mid-arc normal
   // at x = 6 and at x = -7 (their normals by hand: halfway between the
@@ -249,6 +277,10 @@ TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactF
     const Vector3 h = Vector3{0.25 * side / std::abs(side), 0.56, 0.78} / Vector3{0.25, 0.56, 0.78}.norm();
     const Vector3 e = cross(h, Vector3{0, 0, 1}) / cross(h, Vector3{0, 0, 1}).norm();
     layouts.push_back({at + (h + e * 0.2) * 40, at + (h - e * 0.2) * 40});
+  }
+  for (auto& [source, target] : layouts) {
+    source = mirrored(lid, source);
+    target = mirrored(lid, target);
   }
   int found = 0, far_out = 0;
   for (const auto& [source, target] : layouts) {
@@ -263,7 +295,7 @@ TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactF
         if (distance(r.point, centre(c)) < distance(r.point, centre(d))) b = d; else a = c;
       }
       const Point3 nearest = centre(0.5 * (a + b));
-      EXPECT_NEAR(distance(r.point, nearest), kRadius, 1e-7) << r.point.x;
+      EXPECT_NEAR(distance(r.point, nearest), kRadius, 1e-7) << name(lid) << r.point.x;
       const Vector3 n = (nearest - r.point) / kRadius;
       const Vector3 bisector = (source - r.point) / (source - r.point).norm() + (target - r.point) / (target - r.point).norm();
       EXPECT_LT((n - bisector / bisector.norm()).norm(), 1e-6) << r.point.x;
@@ -274,28 +306,31 @@ TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactF
       EXPECT_LT(distance(again.point, r.point), 0.05) << r.point.x;
     }
   }
-  EXPECT_GE(found, 4);
-  EXPECT_GE(far_out, 2);  // away from the middle, where the wall's and the point's x differ
+  EXPECT_GE(found, 4) << name(lid);
+  EXPECT_GE(far_out, 2) << name(lid);  // away from the middle, where the wall's and the point's x differ
+  }
 }
 
 TEST(TearMeniscus, TouchesTheCorneaWhereTheLidCrossesIt) {
   // The headset face's lower margin lies over the cornea in the middle
-  // (5.5 mm below the centre, inside the limbus): the fillet's centres
-  // are r from the shell there, the cap's conicoid; the shell's distance
-  // checked against a march along the normal of the cornea's sphere.
+  // (5.5 mm below the centre, inside the limbus), and so does the upper's:
+  // the fillet's centres are r from the shell there, the cap's conicoid;
+  // the shell's distance checked against a march along the normal of the
+  // cornea's sphere.
   Scene scene = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_face.json");
   EyeAppearance look = scene.eyes[0].appearance();
   look.tear_film = TearFilm{};
   scene.eyes[0].set_appearance(look);
   const std::vector<TearMeniscus> menisci = build_tear_menisci(scene);
-  ASSERT_EQ(menisci.size(), 1u);
+  ASSERT_EQ(menisci.size(), 2u);
   const Eye& eye = scene.eyes[0];
   const Camera& camera = scene.cameras[0];
+  for (const TearMeniscus& meniscus : menisci) {
   int on_cornea = 0;
   for (const Illuminator& led : scene.illuminators) {
-    for (const Reflection& r : menisci[0].highlights(led.position, camera.center())) {
+    for (const Reflection& r : meniscus.highlights(led.position, camera.center())) {
       // The fillet's centre and the keratometric cornea's sphere.
-      const Point3 centre = r.point + r.normal.vector() * kRadius;
+      const Point3 centre = r.point + r.normal.vector() * meniscus.radius_mm();
       const Vector3 out = centre - eye.cornea_center();
       const double to_cornea = out.norm() - eye.model().anterior_cornea.radius_mm;
       // Where it touches the cornea's sphere: inside the limbus by 0.2 mm,
@@ -303,11 +338,12 @@ TEST(TearMeniscus, TouchesTheCorneaWhereTheLidCrossesIt) {
       const Point3 touch = eye.eye_from_world() * (eye.cornea_center() + out * (eye.model().anterior_cornea.radius_mm / out.norm()));
       if (std::hypot(touch.x, touch.y) < eye.model().limbus_radius_mm - 0.2) {
         ++on_cornea;
-        EXPECT_NEAR(to_cornea, kRadius, 1e-6) << led.name;
+        EXPECT_NEAR(to_cornea, meniscus.radius_mm(), 1e-6) << name(meniscus.lid()) << led.name;
       }
     }
   }
-  EXPECT_GE(on_cornea, 3);
+  EXPECT_GE(on_cornea, 3) << name(meniscus.lid());
+  }
 }
 
 TEST(TearMeniscusHighlights, AMovingEyesHighlightsAreTheWholeExposures) {
@@ -333,12 +369,18 @@ TEST(TearMeniscusHighlights, AMovingEyesHighlightsAreTheWholeExposures) {
 TEST(TearMeniscusHighlights, AreNoneWithoutAFaceOrWithARadiusOf0) {
   Scene scene = wet_dark_face();
   EyeAppearance look = scene.eyes[0].appearance();
-  look.tear_film->meniscus_radius_mm = 0;
-  scene.eyes[0].set_appearance(look);
-  EXPECT_TRUE(build_tear_menisci(scene).empty());
-  look.tear_film->meniscus_radius_mm = 0.3;
-  scene.eyes[0].set_appearance(look);
-  EXPECT_EQ(build_tear_menisci(scene).size(), 1u);
+  const auto lids = [&](double lower_mm, double upper_mm) {
+    look.tear_film->meniscus_radius_mm = lower_mm;
+    look.tear_film->upper_meniscus_radius_mm = upper_mm;
+    scene.eyes[0].set_appearance(look);
+    std::vector<Lid> out;
+    for (const TearMeniscus& m : build_tear_menisci(scene)) out.push_back(m.lid());
+    return out;
+  };
+  EXPECT_EQ(lids(0, 0), std::vector<Lid>{});
+  EXPECT_EQ(lids(0.3, 0), std::vector<Lid>{Lid::lower});
+  EXPECT_EQ(lids(0, 0.25), std::vector<Lid>{Lid::upper});
+  EXPECT_EQ(lids(0.3, 0.25), (std::vector<Lid>{Lid::lower, Lid::upper}));
   // The headset with spherical lids and no face: no margin, no meniscus.
   Scene plain = load_scene(std::string(PURKINJE_SOURCE_DIR) + "/assets/scenes/hard/headset_wet.json");
   EXPECT_TRUE(build_tear_menisci(plain).empty());

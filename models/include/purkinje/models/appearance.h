@@ -240,6 +240,12 @@ struct TearFilm {
   // 2019), dry eyes about 0.25 mm. Rendered for eyes with a face only,
   // as its highlights (docs/rendering.md: tear meniscus).
   double meniscus_radius_mm = 0.3;
+  // The upper lid's, the same fillet under its margin (0: none). Smaller
+  // than the lower one in healthy eyes (Wang et al. 2009, Invest
+  // Ophthalmol Vis Sci 50:2722, OCT; by fluorescein the upper's height
+  // 0.36 mm against the lower's 0.40); scaled from the lower's radius by
+  // those heights, rounded down.
+  double upper_meniscus_radius_mm = 0.25;
 };
 // The tear film's refractive index in the near infrared, for its Fresnel
 // reflectance: tears measure 1.3370 at 589 nm (Craig, Simmons, Patel and

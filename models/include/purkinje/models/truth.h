@@ -44,6 +44,7 @@ enum class DistractorKind {
                   // found by the renderer, which builds the lid margins
   spectacle_lens_front,  // a glasses lens's front surface (Scene::spectacle_lenses)
   spectacle_lens_back,   // its back surface, seen through the front one
+  upper_tear_meniscus,   // the upper lid's (TearFilm::upper_meniscus_radius_mm)
 };
 const char* to_string(DistractorKind kind);
 

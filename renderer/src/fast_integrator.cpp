@@ -330,9 +330,7 @@ class FastIntegrator final : public PathIntegrator {
     PerLight scratch(lights_.size());
     double* once = scratch.data();
     double onward = 0;
-    Vector3 a = std::abs(normal.x) < 0.9 ? cross(normal, Vector3{1, 0, 0}) : cross(normal, Vector3{0, 1, 0});
-    a = a * (1.0 / a.norm());
-    const Vector3 b = cross(normal, a);
+    const auto [a, b] = perpendiculars(UnitVector3::from_normalized_unchecked(normal));
     const Point3 origin = point + normal * kRayOffsetMm;
     // Cosine-distributed directions: E = pi * mean radiance.
     const double weight = std::numbers::pi / rays;

@@ -734,9 +734,7 @@ HairShadows RayTracer::hair_shadows(const Point3& light) const {
   const auto axis = UnitVector3::try_normalize((all.lo - light) * 0.5 + (all.hi - light) * 0.5);
   if (!axis) return map;
   const Vector3 ez = *axis;
-  Vector3 ex = std::abs(ez.x) < 0.9 ? cross(ez, Vector3{1, 0, 0}) : cross(ez, Vector3{0, 1, 0});
-  ex = ex * (1.0 / ex.norm());
-  const Vector3 ey = cross(ez, ex);
+  const auto [ex, ey] = perpendiculars(*axis);
 
   std::vector<HairShadows::Footprint>& footprints = map.footprints_;
   double u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;

@@ -61,18 +61,14 @@ constexpr double kFluxQuantum = 4294967296.0;
 constexpr double kPhotonsPerBin = 250;
 
 // Orthonormal vectors perpendicular to a direction (of any length).
-void basis(const Vector3& direction, Vector3& a, Vector3& b) {
-  const Vector3 n = direction * (1.0 / direction.norm());
-  a = std::abs(n.x) < 0.9 ? cross(n, Vector3{1, 0, 0}) : cross(n, Vector3{0, 1, 0});
-  a = a * (1.0 / a.norm());
-  b = cross(n, a);
+Perpendiculars basis(const Vector3& direction) {
+  return perpendiculars(UnitVector3::from_normalized_unchecked(direction * (1.0 / direction.norm())));
 }
 
 // A uniform point of the disc of radius r about `center`, facing `normal`.
 Point3 point_on_disc(const Point3& center, const Vector3& normal, double r, double u, double v) {
   if (!(r > 0)) return center;
-  Vector3 a, b;
-  basis(normal, a, b);
+  const auto [a, b] = basis(normal);
   const double rho = r * std::sqrt(u), phi = 2 * std::numbers::pi * v;
   return center + a * (rho * std::cos(phi)) + b * (rho * std::sin(phi));
 }
@@ -147,9 +143,8 @@ class IrisPhotonMap {
           const double cos_t = 1 - sequence.at(n, 2) * (1 - cos_cone);
           const double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
           const double phi = 2 * std::numbers::pi * sequence.at(n, 3);
-          Vector3 a, b;
           const Vector3 axis = to_center * (1.0 / dist);
-          basis(axis, a, b);
+          const auto [a, b] = basis(axis);
           const Vector3 dir = axis * cos_t + a * (sin_t * std::cos(phi)) + b * (sin_t * std::sin(phi));
           // Flux I * Omega / N, Omega = 2 pi (1 - cos_cone): relative to
           // the cone from the disc's centre.
@@ -386,8 +381,7 @@ class ReferenceIntegrator final : public PathIntegrator {
       w /= survive;
     }
     const Vector3 n = facing_normal(hit);
-    Vector3 a, b;
-    basis(n, a, b);
+    const auto [a, b] = basis(n);
     const double u = rng.next(), v = rng.next();
     const double r = std::sqrt(u), phi = 2 * std::numbers::pi * v;
     const Vector3 dir = n * std::sqrt(std::max(0.0, 1 - u)) + a * (r * std::cos(phi)) + b * (r * std::sin(phi));

@@ -111,4 +111,16 @@ constexpr Vector3 operator*(double s, const UnitVector3& u) { return u.vector() 
 // form, unlike acos of a dot product).
 double angle_between(const Vector3& a, const Vector3& b);
 
+// Two directions that complete n to a right-handed orthonormal frame
+// (a, b, n): a along n x (1, 0, 0), or n x (0, 1, 0) where n lies within
+// 26 deg of the x axis (where the first cross product would lose digits).
+struct Perpendiculars {
+  UnitVector3 a, b;
+};
+inline Perpendiculars perpendiculars(const UnitVector3& n) {
+  Vector3 a = std::abs(n.x()) < 0.9 ? cross(n, Vector3{1, 0, 0}) : cross(n, Vector3{0, 1, 0});
+  a = a * (1.0 / a.norm());
+  return {UnitVector3::from_normalized_unchecked(a), UnitVector3::from_normalized_unchecked(cross(n, a))};
+}
+
 }  // namespace purkinje

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -25,6 +26,7 @@
 #include <vector>
 
 #include "purkinje/models/scene_file.h"
+#include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/render.h"
 
 namespace purkinje::renderer {
@@ -163,6 +165,58 @@ void render_pairs(benchmark::State& state, const std::string& name) {
                                                       benchmark::Counter::kIsRate);
 }
 
+// The floor under a render's time: per image, the scene's ray tracer
+// built (as render() builds it for every image: the face's mesh follows
+// the eye, and Embree commits it) and one camera ray per pixel through
+// its centre, traced in packets as the fast mode traces its first pass;
+// no shading, no lights, no caches, nothing after. Argument 0: the build
+// alone; 1: and the rays. Pairs, as above: two images at once, one thread
+// each.
+void camera_rays_pairs(benchmark::State& state, const std::string& name) {
+  const Scene& s = scene(name);
+  const Camera& camera = s.cameras.at(0);
+  const int width = camera.intrinsics().width, height = camera.intrinsics().height;
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<std::size_t>(width) * height);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) rays.push_back({camera.center(), camera.back_project({double(u), double(v)})});
+  }
+  const bool with_rays = state.range(0) == 1;
+  const auto trace = [&](std::vector<Hit>& hits) {
+    const RayTracer tracer(s);
+    if (!with_rays) return;
+    const std::size_t packet = static_cast<std::size_t>(tracer.packet_width());
+    hits.resize(rays.size());
+    for (std::size_t i = 0; i < rays.size(); i += packet) {
+      const std::size_t n = std::min(packet, rays.size() - i);
+      tracer.intersect(std::span<const Ray>(rays.data() + i, n), std::span<Hit>(hits.data() + i, n));
+    }
+  };
+  std::vector<Hit> a, b;
+  std::barrier step(2);
+  bool done = false;  // written before a barrier, read after it
+  std::thread other([&] {
+    for (;;) {
+      step.arrive_and_wait();
+      if (done) return;
+      trace(b);
+      step.arrive_and_wait();
+    }
+  });
+  for (auto _ : state) {
+    step.arrive_and_wait();
+    trace(a);
+    step.arrive_and_wait();
+    benchmark::DoNotOptimize(a.data());
+    benchmark::DoNotOptimize(b.data());
+  }
+  done = true;
+  step.arrive_and_wait();
+  other.join();
+  state.counters["images_per_s"] = benchmark::Counter(2.0 * static_cast<double>(state.iterations()),
+                                                      benchmark::Counter::kIsRate);
+}
+
 void sampling_args(benchmark::internal::Benchmark* b) {
   for (const auto& [spp, edge] : std::vector<std::pair<int, int>>{{1, 0}, {1, 6}, {1, 10}, {1, 12}, {1, 16}, {1, 24}, {2, 16}, {4, 0}, {8, 0}}) {
     b->Args({spp, edge});
@@ -186,6 +240,12 @@ void BM_RenderRemoteBothEyesPairs(benchmark::State& s) { render_pairs(s, "remote
 void BM_RenderRemoteBothEyesNoBrowsPairs(benchmark::State& s) { render_pairs(s, "remote_face-brows"); }
 void BM_RenderRemoteGlassesPairs(benchmark::State& s) { render_pairs(s, "remote_glasses"); }
 void BM_RenderRemoteGlassesFramePairs(benchmark::State& s) { render_pairs(s, "remote_glasses-lenses"); }
+void BM_CameraRaysRemoteBothEyesPairs(benchmark::State& s) { camera_rays_pairs(s, "remote_face"); }
+void BM_CameraRaysHeadsetFaceLashesPairs(benchmark::State& s) { camera_rays_pairs(s, "headset+face+lashes"); }
+void BM_CameraRaysRemoteFaceLashesPairs(benchmark::State& s) { camera_rays_pairs(s, "remote+face+lashes"); }
+BENCHMARK(BM_CameraRaysRemoteBothEyesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CameraRaysHeadsetFaceLashesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CameraRaysRemoteFaceLashesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemote)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadset)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemotePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();

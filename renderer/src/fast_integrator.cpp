@@ -183,13 +183,13 @@ class FastIntegrator final : public PathIntegrator {
     Pixel image_position;
     std::uint64_t path;
     double reflection_weight = 1;  // of the branches the cornea reflects off this chain
-    // The chain was reflected off the cornea or a lens: the caches, built
-    // for what the camera sees directly, do not serve its points.
-    bool mirrored = false;
-    // Reflected off a cornea: its diffuse points gather their bounced light
-    // (kMirrorGatherRays). A lens mirrors the camera's side, dark in our
-    // scenes: gathering there cost a glasses scene 1.7 times the time.
-    bool gathers = false;
+    // A mirrored chain's points are not served by the caches, built for
+    // what the camera sees directly. Those a cornea mirrors (also after or
+    // before a lens) gather their bounced light (kMirrorGatherRays); a lens
+    // alone mirrors the camera's side, dark in our scenes: gathering there
+    // cost a glasses scene 1.7 times the time.
+    enum class Seen { directly, mirrored_by_lens, mirrored_by_cornea };
+    Seen seen = Seen::directly;
   };
 
   // Radiance arriving along `ray`, times `weight`, added to `out`.
@@ -205,9 +205,9 @@ class FastIntegrator final : public PathIntegrator {
         return;
       case Scattering::diffuse:
         if (const double albedo = diffuse_albedo(scene_, hit); albedo > 0) {
-          if (primary.mirrored) {
+          if (primary.seen != Primary::Seen::directly) {
             direct_light(hit, albedo * weight, out);
-            if (primary.gathers && !is_hair(hit.surface)) {
+            if (primary.seen == Primary::Seen::mirrored_by_cornea && !is_hair(hit.surface)) {
               interreflection(diffuse_point(ray, hit), albedo * weight, primary, out);
             }
             return;
@@ -302,7 +302,7 @@ class FastIntegrator final : public PathIntegrator {
     // A hair takes the cached light of the surface behind it, a few
     // millimetres away (no node lies on a hair).
     const bool hair = is_hair(p.surface);
-    if (primary.mirrored) {
+    if (primary.seen != Primary::Seen::directly) {
       gather_hemisphere(p.point, p.normal, kMirrorGatherRays, kMirrorGatherStream, primary.path, e);
     } else if (!diffuse_->irradiance(primary.image_position, hair ? diffuse_point_at(primary.image_position) : p, e)) {
       std::fill(e, e + lights_.size(), 0.0);
@@ -637,8 +637,10 @@ class FastIntegrator final : public PathIntegrator {
     const double w_reflected = weight * c.reflectance;
     const double share = primary.reflection_weight;
     if (w_reflected > kMinBranchWeight && c.reflected && share > 0) {
-      const Primary mirror{nullptr, primary.image_position, primary.path, 1.0, true,
-                           primary.gathers || hit.surface != Surface::spectacle_lens};
+      const Primary mirror{nullptr, primary.image_position, primary.path, 1.0,
+                           primary.seen == Primary::Seen::mirrored_by_cornea || hit.surface != Surface::spectacle_lens
+                               ? Primary::Seen::mirrored_by_cornea
+                               : Primary::Seen::mirrored_by_lens};
       trace({hit.point + c.facing * kRayOffsetMm, *c.reflected}, depth + 1, w_reflected * share, out, mirror);
     }
   }

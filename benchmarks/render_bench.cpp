@@ -253,11 +253,11 @@ BENCHMARK(BM_RenderHeadsetPairs)->Args({1, 10})->Args({1, 12})->Args({1, 16})->U
 BENCHMARK(BM_RenderRemoteFace)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadsetFace)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteFacePairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_RenderHeadsetFacePairs)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetFacePairs)->Args({1, 0})->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteFaceLashes)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderHeadsetFaceLashes)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteFaceLashesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_RenderHeadsetFaceLashesPairs)->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHeadsetFaceLashesPairs)->Args({1, 0})->Args({1, 10})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteBothEyesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteBothEyesNoBrowsPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemoteGlassesPairs)->Args({1, 0})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -133,6 +133,32 @@ void render_scene(benchmark::State& state, const std::string& name, RenderMode m
   state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
 }
 
+// Each iteration runs work(0) here and work(1) on a second thread at once,
+// in step; counts two images an iteration.
+template <typename Work>
+void in_pairs(benchmark::State& state, const Work& work) {
+  std::barrier step(2);
+  bool done = false;  // written before a barrier, read after it
+  std::thread other([&] {
+    for (;;) {
+      step.arrive_and_wait();
+      if (done) return;
+      work(1);
+      step.arrive_and_wait();
+    }
+  });
+  for (auto _ : state) {
+    step.arrive_and_wait();
+    work(0);
+    step.arrive_and_wait();
+  }
+  done = true;
+  step.arrive_and_wait();
+  other.join();
+  state.counters["images_per_s"] = benchmark::Counter(2.0 * static_cast<double>(state.iterations()),
+                                                      benchmark::Counter::kIsRate);
+}
+
 // Throughput as a data set is made: two images at once, one thread each
 // (no serial phases, no synchronisation), on a 2-core machine; each worker
 // renders into its own result, as a data set's workers would.
@@ -140,29 +166,11 @@ void render_pairs(benchmark::State& state, const std::string& name) {
   RenderOptions options = bench_options(state, RenderMode::fast);
   options.threads = 1;
   const Scene& s = scene(name);
-  RenderResult a, b;
-  std::barrier step(2);
-  bool done = false;  // written before a barrier, read after it
-  std::thread other([&] {
-    for (;;) {
-      step.arrive_and_wait();
-      if (done) return;
-      render(s, 0, options, b);
-      step.arrive_and_wait();
-    }
+  RenderResult results[2];
+  in_pairs(state, [&](int k) {
+    render(s, 0, options, results[k]);
+    benchmark::DoNotOptimize(results[k].electrons.values.data());
   });
-  for (auto _ : state) {
-    step.arrive_and_wait();
-    render(s, 0, options, a);
-    step.arrive_and_wait();
-    benchmark::DoNotOptimize(a.electrons.values.data());
-    benchmark::DoNotOptimize(b.electrons.values.data());
-  }
-  done = true;
-  step.arrive_and_wait();
-  other.join();
-  state.counters["images_per_s"] = benchmark::Counter(2.0 * static_cast<double>(state.iterations()),
-                                                      benchmark::Counter::kIsRate);
 }
 
 // The floor under a render's time: per image, the scene's ray tracer
@@ -182,39 +190,18 @@ void camera_rays_pairs(benchmark::State& state, const std::string& name) {
     for (int u = 0; u < width; ++u) rays.push_back({camera.center(), camera.back_project({double(u), double(v)})});
   }
   const bool with_rays = state.range(0) == 1;
-  const auto trace = [&](std::vector<Hit>& hits) {
+  std::vector<Hit> hits[2];
+  in_pairs(state, [&](int k) {
     const RayTracer tracer(s);
     if (!with_rays) return;
     const std::size_t packet = static_cast<std::size_t>(tracer.packet_width());
-    hits.resize(rays.size());
+    hits[k].resize(rays.size());
     for (std::size_t i = 0; i < rays.size(); i += packet) {
       const std::size_t n = std::min(packet, rays.size() - i);
-      tracer.intersect(std::span<const Ray>(rays.data() + i, n), std::span<Hit>(hits.data() + i, n));
+      tracer.intersect(std::span<const Ray>(rays.data() + i, n), std::span<Hit>(hits[k].data() + i, n));
     }
-  };
-  std::vector<Hit> a, b;
-  std::barrier step(2);
-  bool done = false;  // written before a barrier, read after it
-  std::thread other([&] {
-    for (;;) {
-      step.arrive_and_wait();
-      if (done) return;
-      trace(b);
-      step.arrive_and_wait();
-    }
+    benchmark::DoNotOptimize(hits[k].data());
   });
-  for (auto _ : state) {
-    step.arrive_and_wait();
-    trace(a);
-    step.arrive_and_wait();
-    benchmark::DoNotOptimize(a.data());
-    benchmark::DoNotOptimize(b.data());
-  }
-  done = true;
-  step.arrive_and_wait();
-  other.join();
-  state.counters["images_per_s"] = benchmark::Counter(2.0 * static_cast<double>(state.iterations()),
-                                                      benchmark::Counter::kIsRate);
 }
 
 void sampling_args(benchmark::internal::Benchmark* b) {

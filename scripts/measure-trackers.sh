@@ -54,7 +54,7 @@ measure headset_face assets/scenes/hard/headset_face.json "$hard" --variation-se
 measure headset_face_textured assets/scenes/hard/headset_face_textured.json "$hard" --variation-seed 6
 measure remote_face assets/scenes/remote_face.json "$hard" --variation-seed 6
 # Wet faces (session 32): the same draws with tear films, whose sclera and
-# lower tear menisci mirror the LEDs.
+# tear menisci (both lids' since session 37) mirror the LEDs.
 measure headset_face_wet assets/scenes/hard/headset_face_wet.json "$hard" --variation-seed 6
 measure remote_face_wet assets/scenes/hard/remote_face_wet.json "$hard" --variation-seed 6
 # Glasses (session 33): the bundled frame with its -3 D lenses, whose

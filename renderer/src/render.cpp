@@ -438,8 +438,9 @@ void image_distractors(const Scene& scene, int camera_index, const std::vector<T
               d.kind == DistractorKind::spectacle_lens_front ? LensSurface::front : LensSurface::back;
           image.radiometry = ghost_radiometry(scene.spectacle_lenses[d.spectacle_lens], surface, led, camera);
         } else {
-          const auto meniscus = std::find_if(menisci.begin(), menisci.end(),
-                                             [&](const TearMeniscus& m) { return m.eye() == view.eye && meniscus_kind(m.lid()) == d.kind; });
+          const auto meniscus = std::find_if(menisci.begin(), menisci.end(), [&](const TearMeniscus& m) {
+            return m.eye() == view.eye && meniscus_kind(m.lid()) == d.kind;
+          });
           // Only this render's menisci label such highlights.
           image.radiometry = meniscus == menisci.end()
                                  ? failed_radiometry(PathStatus::not_converged)
@@ -532,7 +533,7 @@ void render_instant(const Scene& scene, int camera_index, const RenderOptions& o
     }
   };
   result.truth = compute_truth(scene, truth_options);
-  // The lower lids' tear menisci: the faces' margins are built here, so
+  // The lids' tear menisci: the faces' margins are built here, so
   // their highlights join the labels here.
   const std::vector<TearMeniscus> menisci = build_tear_menisci(scene);
   add_meniscus_highlights(scene, camera_index, menisci, truth_options, result.truth);

@@ -466,8 +466,8 @@ std::vector<TearMeniscus> build_tear_menisci(const Scene& scene) {
     const double b = nasal * kFissureReach * look.eyelids->half_width_mm;
     const double lower_r = look.tear_film->meniscus_radius_mm, upper_r = look.tear_film->upper_meniscus_radius_mm;
     // Along the fissure, where the margins stand apart by more than twice
-    // the menisci's widths together (they would meet): the run about the
-    // middle, for both.
+    // the two menisci's radii together (nearer, they would meet): the run
+    // about the middle, for both.
     const auto open = [&](double x) {
       const FissureMargins m = margins(x);
       return m.upper_mm - m.lower_mm > 2 * (lower_r + upper_r);

@@ -1107,8 +1107,11 @@ TEST(SceneFile, ASpectacleLensIsShapedByItsPrescription) {
     EXPECT_EQ(lens.name, "lens0");
     EXPECT_NEAR(back_vertex_power_d(lens), power, 1e-12);
     EXPECT_NEAR(front_surface_power_d(lens), power > 0 ? 7 : 5.25, 1e-12);
-    if (power < 0) EXPECT_EQ(lens.center_thickness_mm, 2);
-    if (power > 0) EXPECT_NEAR(lens_thickness_mm(lens, 25, 0), 1, 1e-6);
+    if (power < 0) {
+      EXPECT_EQ(lens.center_thickness_mm, 2);
+    } else {
+      EXPECT_NEAR(lens_thickness_mm(lens, 25, 0), 1, 1e-6);
+    }
     // Lens +z (out of its front) toward the camera, +y up (world -y).
     EXPECT_NEAR((lens.world_from_lens * Vector3{0, 0, 1}).z, -1, 1e-15);
     EXPECT_NEAR((lens.world_from_lens * Vector3{0, 1, 0}).y, -1, 1e-15);

@@ -229,8 +229,9 @@ def test_a_wet_faces_tear_meniscus_highlights_are_labelled_and_imaged():
     d["eyes"][0]["appearance"]["tear_film"] = {}
     result = purkinje.render(purkinje.parse_scene(d), noise=False)
     labels = result.labels.views[0].distractors
-    seen = [x for x in labels if x.kind == "tear_meniscus" and x.status == "ok"]
-    assert len(seen) >= 2
+    for kind in ("tear_meniscus", "upper_tear_meniscus"):
+        seen = [x for x in labels if x.kind == kind and x.status == "ok"]
+        assert len(seen) >= 2, kind
     share = float((result.aov("distractor") * result.electrons).sum())
     assert share == pytest.approx(sum(x["electrons"] for x in result.distractors), rel=1e-4)
     # Without menisci, the sclera's highlights alone.

@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -311,6 +313,22 @@ TEST(TearMeniscus, OnACurvedMarginItsHighlightsObeyTheLawOfReflectionOnTheExactF
   }
 }
 
+TEST(TearMeniscus, NeedsAMarginThatCurvesGentlerThanItsRadiusTowardTheOpening) {
+  // A margin that bends toward the opening tighter than r (a parabola of
+  // curvature 4 / mm at its middle, 1 / r = 3.3 / mm) leaves no room for the
+  // fillet there: its circles' centres would run backwards. Bent as
+  // tightly away from the opening, it has one. The lower lid's opening is
+  // above its margin, the upper's below.
+  for (const Lid lid : kLids) {
+    for (const double toward : {1.0, -1.0}) {
+      const double s = sign(lid), bend = 2.0 * toward * s;
+      const auto margin = [s, bend](double x) { return s * kMargin + bend * x * x; };
+      const std::optional<TearMeniscus> meniscus = TearMeniscus::build(0, lid, Pose(), kRadius, margin, kSphere, -2, 2);
+      EXPECT_EQ(meniscus.has_value(), toward < 0) << name(lid) << toward;
+    }
+  }
+}
+
 TEST(TearMeniscus, TouchesTheCorneaWhereTheLidCrossesIt) {
   // The headset face's lower margin lies over the cornea in the middle
   // (5.5 mm below the centre, inside the limbus), and so does the upper's:
@@ -360,9 +378,16 @@ TEST(TearMeniscusHighlights, AMovingEyesHighlightsAreTheWholeExposures) {
   ASSERT_EQ(truth.size(), result.distractors.size());
   ASSERT_FALSE(truth.empty());
   EXPECT_NEAR(imaged_over_labelled(result), 1, 1e-3);
-  for (std::size_t k = 1; k < truth.size(); ++k) {
-    EXPECT_LE(static_cast<int>(truth[k - 1].kind) * 100 + truth[k - 1].illuminator,
-              static_cast<int>(truth[k].kind) * 100 + truth[k].illuminator);
+  // The sclera's, then the lower lid's meniscus's, then the upper's, each
+  // by light (docs/labels.md); both lids' there.
+  const auto rank = [](const DistractorTruth& d) {
+    const int kind = d.kind == DistractorKind::sclera ? 0 : d.kind == DistractorKind::tear_meniscus ? 1 : 2;
+    return kind * 100 + d.illuminator;
+  };
+  for (std::size_t k = 1; k < truth.size(); ++k) EXPECT_LE(rank(truth[k - 1]), rank(truth[k])) << k;
+  for (const DistractorKind kind : {DistractorKind::tear_meniscus, DistractorKind::upper_tear_meniscus}) {
+    EXPECT_TRUE(std::any_of(truth.begin(), truth.end(), [&](const DistractorTruth& d) { return d.kind == kind; }))
+        << to_string(kind);
   }
 }
 

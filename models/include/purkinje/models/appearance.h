@@ -242,9 +242,10 @@ struct TearFilm {
   double meniscus_radius_mm = 0.3;
   // The upper lid's, the same fillet under its margin (0: none). Smaller
   // than the lower one in healthy eyes (Wang et al. 2009, Invest
-  // Ophthalmol Vis Sci 50:2722, OCT; by fluorescein the upper's height
-  // 0.36 mm against the lower's 0.40); scaled from the lower's radius by
-  // those heights, rounded down.
+  // Ophthalmol Vis Sci 50:2722, by OCT). An ARVO abstract measured the
+  // heights by fluorescein, the upper's 0.36 mm against the lower's 0.40
+  // in controls: the default scales the lower's radius by that, rounded
+  // down (a guess).
   double upper_meniscus_radius_mm = 0.25;
 };
 // The tear film's refractive index in the near infrared, for its Fresnel

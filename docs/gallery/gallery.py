@@ -184,7 +184,7 @@ def main(stems):
     old_rows = {row.split("](")[0][4:]: row for row in table.splitlines() if row.startswith("| ![")}
     rows = ["| image | what it shows |", "| --- | --- |"]
     for entry in bundled + drawn:
-        if stems and entry[0] not in stems:
+        if stems and entry[0] not in stems and entry[0] in old_rows:
             rows.append(old_rows[entry[0]])
             continue
         rows.append(draw(*entry, HERE))

@@ -108,8 +108,9 @@ class DistractorLabel:
     """A highlight that is no Purkinje image (docs/labels.md, views[k].distractors[j]):
     kind "sclera", one light mirrored by a wet sclera's tear film,
     "tear_meniscus" and "upper_tear_meniscus", by the lower and the upper
-    lid's tear meniscus (render labels only), or "spectacle_lens_front" / "spectacle_lens_back", by a glasses lens's
-    surface (a ghost; spectacle_lens names the lens)."""
+    lid's tear meniscus (render labels only), or "spectacle_lens_front" /
+    "spectacle_lens_back", by a glasses lens's surface (a ghost;
+    spectacle_lens names the lens)."""
 
     kind: str
     illuminator: int

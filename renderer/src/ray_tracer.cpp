@@ -171,7 +171,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     lane.surface = &surface;
     lane.mesh = nullptr;
     lane.hairs = nullptr;
-    lane.local_point = local_point;
+    lane.local_point.value = local_point;
     RTCRayN_tfar(rays, args->N, i) = embree_far(t - lane.t_shift);
     set_hit(hits, args->N, i, args->geomID, args->primID, query->embree.instID[0]);
   }

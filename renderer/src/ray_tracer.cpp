@@ -637,7 +637,9 @@ Hit RayTracer::intersect(const Ray& ray) const {
   if (!(ray.t_min < ray.t_max)) return {};
   Lane lane = lane_of(ray);
   impl_->run<false>(lane, {});
-  return hit_of(ray, lane);
+  Hit hit;
+  hit_of(ray, lane, hit);
+  return hit;
 }
 
 void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
@@ -664,7 +666,7 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
     } else {
       impl_->run_packet(lanes, count);
     }
-    for (std::size_t i = 0; i < count; ++i) hits[first + i] = hit_of(rays[first + i], lanes[i]);
+    for (std::size_t i = 0; i < count; ++i) hit_of(rays[first + i], lanes[i], hits[first + i]);
   }
 }
 
@@ -687,7 +689,9 @@ Hit RayTracer::intersect_except_hair(const Ray& ray) const {
   if (!(ray.t_min < ray.t_max)) return {};
   Lane lane = lane_of(ray);
   impl_->run<false>(lane, {.hair = true});
-  return hit_of(ray, lane);
+  Hit hit;
+  hit_of(ray, lane, hit);
+  return hit;
 }
 
 bool RayTracer::occluded_except_hair(const Point3& from, const Point3& to) const {

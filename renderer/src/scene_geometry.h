@@ -385,10 +385,11 @@ inline Lane lane_of(const Ray& ray) {
   return lane;
 }
 
-// The hit a query left in its lane.
-inline Hit hit_of(const Ray& ray, const Lane& lane) {
-  Hit hit;
-  if (!lane.found()) return hit;
+// The hit a query left in its lane, written into `hit` (in place: a
+// returned Hit copied into a packet's array stalled on store forwarding).
+inline void hit_of(const Ray& ray, const Lane& lane, Hit& hit) {
+  hit = Hit{};
+  if (!lane.found()) return;
   hit.t = lane.t_hi;
   hit.point = ray.origin + ray.direction * lane.t_hi;
   if (lane.mesh) {
@@ -412,7 +413,6 @@ inline Hit hit_of(const Ray& ray, const Lane& lane) {
     hit.normal = lane.surface->world_normal(lane.local_point.value);
     hit.front_face = dot(ray.direction, hit.normal) < 0;
   }
-  return hit;
 }
 
 }  // namespace purkinje::renderer

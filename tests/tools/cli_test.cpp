@@ -46,8 +46,9 @@ bool mentions_non_finite(const std::string& text) {
   return false;
 }
 
-// A PNG's width and height, from its header.
-std::pair<int, int> png_size(const std::string& png) {
+// A PNG's width and height, from its header (for the figures' tests: a
+// build without PURKINJE_FIGURES has none).
+[[maybe_unused]] std::pair<int, int> png_size(const std::string& png) {
   if (png.size() < 24 || png.substr(1, 3) != "PNG") return {0, 0};
   const auto big_endian = [&](std::size_t at) {
     int v = 0;

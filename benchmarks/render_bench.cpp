@@ -13,6 +13,7 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <array>
 #include <algorithm>
 #include <barrier>
 #include <cmath>

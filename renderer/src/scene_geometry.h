@@ -61,8 +61,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <vector>
 #include <type_traits>
+#include <vector>
 
 #include "purkinje/models/scene.h"
 #include "purkinje/renderer/ray_tracer.h"

@@ -13,8 +13,8 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
-#include <array>
 #include <algorithm>
+#include <array>
 #include <barrier>
 #include <cmath>
 #include <cstdlib>

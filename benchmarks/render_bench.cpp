@@ -11,10 +11,12 @@
 // scene and run.
 
 #include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <barrier>
 #include <cmath>
 #include <cstdlib>
@@ -29,6 +31,7 @@
 #include "purkinje/models/scene_file.h"
 #include "purkinje/renderer/ray_tracer.h"
 #include "purkinje/renderer/render.h"
+#include "scene_geometry.h"
 
 namespace purkinje::renderer {
 namespace {
@@ -208,6 +211,112 @@ void camera_rays_pairs(benchmark::State& state, const std::string& name) {
   });
 }
 
+// A bound under any Embree ray tracer of a scene's meshes: their triangles
+// (the faces, both eyes' in remote_face) alone in a plain Embree scene, no
+// filters (float hits, not the renderer's double), no eyes, no hairs; per
+// image one camera ray per pixel through its centre in packets along a row
+// (argument 0), and for each ray that meets a triangle one shadow ray to
+// each light (argument 1: the least a Lambertian pixel's direct light
+// costs). The BVH is built once, outside the timing. Pairs, as above.
+void embree_bound_pairs(benchmark::State& state, const std::string& name) {
+  const Scene& s = scene(name);
+  const Camera& camera = s.cameras.at(0);
+  const int width = camera.intrinsics().width, height = camera.intrinsics().height;
+  const bool with_shadows = state.range(0) == 1;
+  const char* config = std::getenv("PURKINJE_EMBREE_CONFIG");
+  RTCDevice device = rtcNewDevice(config ? config : "");
+  RTCScene rtc = rtcNewScene(device);
+  rtcSetSceneFlags(rtc, RTC_SCENE_FLAG_NONE);
+  const SceneGeometry geometry = build_scene_geometry(s);
+  std::size_t triangles = 0;
+  for (const auto& mesh : geometry.meshes) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), mesh->vertices().size()));
+    auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                             3 * sizeof(unsigned), mesh->triangles().size()));
+    for (std::size_t i = 0; i < mesh->vertices().size(); ++i) {
+      const Point3& p = mesh->vertices()[i];
+      v[3 * i + 0] = static_cast<float>(p.x);
+      v[3 * i + 1] = static_cast<float>(p.y);
+      v[3 * i + 2] = static_cast<float>(p.z);
+    }
+    for (std::size_t i = 0; i < mesh->triangles().size(); ++i) {
+      for (int k = 0; k < 3; ++k) t[3 * i + k] = mesh->triangles()[i][k];
+    }
+    triangles += mesh->triangles().size();
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(rtc, g);
+    rtcReleaseGeometry(g);
+  }
+  rtcCommitScene(rtc);
+  const Point3 o = camera.center();
+  std::vector<Point3> lights;
+  for (const Illuminator& l : s.illuminators) lights.push_back(l.position);
+  std::atomic<long> seen{0};
+  in_pairs(state, [&](int) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit8 packet;
+    RTCRay8 shadow;
+    alignas(32) int valid[8];
+    long hits = 0, lit = 0;
+    for (int v = 0; v < height; ++v) {
+      for (int first = 0; first < width; first += 8) {
+        for (int i = 0; i < 8; ++i) {
+          const int u = std::min(first + i, width - 1);
+          const Vector3 d = camera.back_project({double(u), double(v)}).vector();
+          valid[i] = first + i < width ? -1 : 0;
+          packet.ray.org_x[i] = float(o.x);
+          packet.ray.org_y[i] = float(o.y);
+          packet.ray.org_z[i] = float(o.z);
+          packet.ray.dir_x[i] = float(d.x);
+          packet.ray.dir_y[i] = float(d.y);
+          packet.ray.dir_z[i] = float(d.z);
+          packet.ray.tnear[i] = 0;
+          packet.ray.tfar[i] = 1e30f;
+          packet.ray.time[i] = 0;
+          packet.ray.mask[i] = ~0u;
+          packet.ray.flags[i] = 0;
+          packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect8(valid, rtc, &context, &packet);
+        if (!with_shadows) {
+          for (int i = 0; i < 8; ++i) hits += packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+          continue;
+        }
+        for (const Point3& l : lights) {
+          for (int i = 0; i < 8; ++i) {
+            // From just before the hit toward the light; tfar 1: the light.
+            const bool hit = valid[i] && packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+            const float t = packet.ray.tfar[i] * 0.9999f;
+            shadow.org_x[i] = packet.ray.org_x[i] + t * packet.ray.dir_x[i];
+            shadow.org_y[i] = packet.ray.org_y[i] + t * packet.ray.dir_y[i];
+            shadow.org_z[i] = packet.ray.org_z[i] + t * packet.ray.dir_z[i];
+            shadow.dir_x[i] = float(l.x) - shadow.org_x[i];
+            shadow.dir_y[i] = float(l.y) - shadow.org_y[i];
+            shadow.dir_z[i] = float(l.z) - shadow.org_z[i];
+            shadow.tnear[i] = 0;
+            shadow.tfar[i] = 0.9999f;
+            shadow.time[i] = 0;
+            shadow.mask[i] = ~0u;
+            shadow.flags[i] = 0;
+            valid[i] = hit ? -1 : 0;
+          }
+          rtcOccluded8(valid, rtc, &context, &shadow);  // an occluded ray's tfar becomes -inf
+          for (int i = 0; i < 8; ++i) lit += valid[i] && shadow.tfar[i] >= 0;
+          for (int i = 0; i < 8; ++i) valid[i] = first + i < width ? -1 : 0;
+        }
+      }
+    }
+    seen += hits + lit;
+  });
+  state.counters["triangles"] = static_cast<double>(triangles);
+  state.counters["hits_or_lit_per_image"] = static_cast<double>(seen) / (2.0 * static_cast<double>(state.iterations()));
+  rtcReleaseScene(rtc);
+  rtcReleaseDevice(device);
+}
+
 void sampling_args(benchmark::internal::Benchmark* b) {
   for (const auto& [spp, edge] : std::vector<std::pair<int, int>>{{1, 0}, {1, 6}, {1, 10}, {1, 12}, {1, 16}, {1, 24}, {2, 16}, {4, 0}, {8, 0}}) {
     b->Args({spp, edge});
@@ -232,9 +341,13 @@ void BM_RenderRemoteBothEyesNoBrowsPairs(benchmark::State& s) { render_pairs(s, 
 void BM_RenderRemoteGlassesPairs(benchmark::State& s) { render_pairs(s, "remote_glasses"); }
 void BM_RenderRemoteGlassesFramePairs(benchmark::State& s) { render_pairs(s, "remote_glasses-lenses"); }
 void BM_CameraRaysRemoteBothEyesPairs(benchmark::State& s) { camera_rays_pairs(s, "remote_face"); }
+void BM_EmbreeBoundRemoteBothEyesPairs(benchmark::State& s) { embree_bound_pairs(s, "remote_face"); }
+void BM_EmbreeBoundHeadsetFacePairs(benchmark::State& s) { embree_bound_pairs(s, "headset+face"); }
 void BM_CameraRaysHeadsetFaceLashesPairs(benchmark::State& s) { camera_rays_pairs(s, "headset+face+lashes"); }
 void BM_CameraRaysRemoteFaceLashesPairs(benchmark::State& s) { camera_rays_pairs(s, "remote+face+lashes"); }
 BENCHMARK(BM_CameraRaysRemoteBothEyesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EmbreeBoundRemoteBothEyesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EmbreeBoundHeadsetFacePairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CameraRaysHeadsetFaceLashesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CameraRaysRemoteFaceLashesPairs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RenderRemote)->Apply(sampling_args)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -36,8 +36,15 @@ AnatomyProblem problem(std::string key, double value, std::string rule) {
 bool positive(double v) { return v > 0 && std::isfinite(v); }
 
 // pupil.decentration_mm as the scene file writes it.
+// Appended, not "[" + ...: g++ 12 warns falsely (-Wrestrict, its bug 105329)
+// on a string literal plus a std::string.
 std::string decentration_text(const EyeModel& m) {
-  return "[" + format_number(m.pupil_decentration_x_mm) + ", " + format_number(m.pupil_decentration_y_mm) + "]";
+  std::string text = "[";
+  text += format_number(m.pupil_decentration_x_mm);
+  text += ", ";
+  text += format_number(m.pupil_decentration_y_mm);
+  text += "]";
+  return text;
 }
 
 // Sizes that must be positive before any rule between keys means anything

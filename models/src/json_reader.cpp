@@ -29,8 +29,15 @@ std::string format_value(const json& v, int depth) {
   return text;
 }
 
+// Appended (g++ 12's false -Wrestrict on "[" + std::string, its bug 105329).
 std::string format_point(const Point3& p) {
-  return "[" + format_number(p.x) + ", " + format_number(p.y) + ", " + format_number(p.z) + "]";
+  std::string text = "[";
+  for (const double x : {p.x, p.y, p.z}) {
+    if (text.size() > 1) text += ", ";
+    text += format_number(x);
+  }
+  text += "]";
+  return text;
 }
 
 std::string join(const std::vector<std::string>& items) {

@@ -313,7 +313,9 @@ TEST(Scorer, FiguresOverAllLabelsCountTheMisses) {
     Detections d;
     if (i < 2) d.pupils = {{{100.1, 100}, std::nullopt, std::nullopt}};
     if (i == 2) d.pupils = {{{140, 100}, std::nullopt, std::nullopt}};  // 40 px off: a false positive and a miss
-    scorer.add("i" + std::to_string(i) + ".png", {round_pupil({100, 100}, 10)}, d);
+    std::string image = "i";  // appended: g++ 12's false -Wrestrict on "i" + std::string
+    image += std::to_string(i) + ".png";
+    scorer.add(image, {round_pupil({100, 100}, 10)}, d);
   }
   const Score s = scorer.score();
   EXPECT_NEAR(s.pupils.error_px.median, 0.1, 1e-9);

@@ -180,8 +180,11 @@ DetectionsFile parse_detections_file(std::string text, const std::filesystem::pa
     const std::optional<double> light = row.optional_number(illuminator);
     const std::optional<double> a = row.optional_number(semi_axis_1_px), b = row.optional_number(semi_axis_2_px),
                                 angle = row.optional_number(angle_deg);
-    // Confidence -1 is "none" in several toolkits.
-    const std::optional<double> conf = is_minus_one(row.text(confidence)) ? std::nullopt : row.optional_number(confidence);
+    // Confidence -1 is "none" in several toolkits. (Assigned, not chosen by
+    // a conditional expression: g++ 12 warned falsely that the latter's
+    // value may be used uninitialized.)
+    std::optional<double> conf;
+    if (!is_minus_one(row.text(confidence))) conf = row.optional_number(confidence);
     if (glint_row) {
       for (const Column c : {semi_axis_1_px, semi_axis_2_px, angle_deg}) {
         if (!row.empty(c)) row.fail(c, "is a pupil's column: leave it empty for a glint");

@@ -200,7 +200,10 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
   }
   const double depth = model.pupil_depth_mm;
   double change = INFINITY;
-  std::optional<Vector3> last_move;
+  // The last plain step, while has_last_move (not a std::optional: g++ 12
+  // warned falsely that its value may be used uninitialized).
+  Vector3 last_move;
+  bool has_last_move = false;
   std::optional<UnitVector3> before_jump;  // the plain step's axis, while an Aitken step is tried
   bool jumps = true;
   for (int iteration = 0; iteration < 200; ++iteration) {
@@ -250,19 +253,22 @@ std::optional<OpticalAxis> optical_axis_from_pupil_outline(const Camera& camera,
     // axis overshoots and swings back): the rest of the way, r / (1 - r)
     // of this step, taken at once (Aitken), then two plain steps to measure
     // r again. The test above still decides when it has converged.
-    if (last_move && jumps) {
-      const double r = dot(move, *last_move) / last_move->squared_norm();
-      if (std::abs(r) < 0.5 && std::abs(dot(move, *last_move)) > 0.9 * move.norm() * last_move->norm()) {
+    if (has_last_move && jumps) {
+      const double r = dot(move, last_move) / last_move.squared_norm();
+      if (std::abs(r) < 0.5 && std::abs(dot(move, last_move)) > 0.9 * move.norm() * last_move.norm()) {
         if (const auto jumped = UnitVector3::try_normalize(axis->vector() + move * (r / (1 - r)))) {
           before_jump = axis;
           axis = jumped;
         }
-        last_move.reset();
+        has_last_move = false;
         change = INFINITY;
         continue;
       }
     }
-    if (model.cornea_asphericity != 0) last_move = move;
+    if (model.cornea_asphericity != 0) {
+      last_move = move;
+      has_last_move = true;
+    }
     change = step;
   }
   return std::nullopt;

@@ -3,14 +3,17 @@
 #include <OpenImageIO/hash.h>
 
 #include <algorithm>
+#include <charconv>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -128,7 +131,10 @@ class Table {
     columns.push_back("eye.cornea_radius_mm");
     columns.push_back("eye.pupil_radius_mm");
     std::string line;
-    for (const std::string& c : columns) line += (line.empty() ? "" : ",") + csv_cell(c);
+    for (const std::string& c : columns) {
+      if (!line.empty()) line += ',';
+      line += csv_cell(c);
+    }
     return line + "\n";
   }
 
@@ -522,14 +528,46 @@ GenerateOutcome generate(const GeneratePlan& plan, const GenerateHooks& hooks) {
   return outcome;
 }
 
+namespace {
+
+// A shard manifest's name, manifest.shard-I-of-N.json, as (I, N); nothing
+// for any other name. I and N beyond 2^64 - 1 are refused, naming the file.
+struct ShardName {
+  std::uint64_t i = 0, n = 0;
+};
+std::optional<ShardName> shard_name(const fs::path& file) {
+  constexpr std::string_view prefix = "manifest.shard-", middle = "-of-", suffix = ".json";
+  const std::string name = file.filename().string();
+  std::string_view rest = name;
+  if (!rest.starts_with(prefix) || !rest.ends_with(suffix) || rest.size() < prefix.size() + suffix.size()) {
+    return std::nullopt;
+  }
+  rest = rest.substr(prefix.size(), rest.size() - prefix.size() - suffix.size());
+  const std::size_t of = rest.find(middle);
+  if (of == std::string_view::npos) return std::nullopt;
+  const auto number = [&](std::string_view digits) -> std::optional<std::uint64_t> {
+    if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      return std::nullopt;
+    }
+    std::uint64_t value = 0;
+    if (std::from_chars(digits.data(), digits.data() + digits.size(), value).ec != std::errc{}) {
+      throw std::runtime_error(file.string() + ": a shard number beyond " +
+                               std::to_string(std::numeric_limits<std::uint64_t>::max()));
+    }
+    return value;
+  };
+  const std::optional<std::uint64_t> i = number(rest.substr(0, of)), n = number(rest.substr(of + middle.size()));
+  if (!i || !n) return std::nullopt;
+  return ShardName{*i, *n};
+}
+
+}  // namespace
+
 MergeOutcome merge_shards(const fs::path& dir) {
-  const std::regex pattern(R"(manifest\.shard-([0-9]+)-of-([0-9]+)\.json)");
   std::map<std::uint64_t, std::map<std::uint64_t, fs::path>> splits;  // N -> i -> file
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
-    std::smatch m;
-    const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, pattern)) splits[std::stoull(m[2])][std::stoull(m[1])] = e.path();
+    if (const std::optional<ShardName> shard = shard_name(e.path())) splits[shard->n][shard->i] = e.path();
   }
   if (ec) throw std::runtime_error(dir.string() + ": cannot list: " + ec.message());
   if (splits.empty()) {

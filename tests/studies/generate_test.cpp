@@ -407,6 +407,17 @@ TEST(Generate, MergeRefusesWhatIsNotTheShardsOfOneSet) {
   run(spec, dir / "set", {0, 3});
   EXPECT_NE(message().find("shards of 2 and of 3 shards side by side"), std::string::npos) << message();
   fs::remove(dir / "set" / "manifest.shard-0-of-3.json");
+  // A shard number no 64-bit count holds is named; names that only look
+  // like a shard manifest's are left alone.
+  std::ofstream(dir / "set" / "manifest.shard-0-of-18446744073709551616.json") << "{}";
+  EXPECT_NE(message().find("manifest.shard-0-of-18446744073709551616.json: a shard number beyond 18446744073709551615"),
+            std::string::npos)
+      << message();
+  fs::remove(dir / "set" / "manifest.shard-0-of-18446744073709551616.json");
+  for (const char* decoy : {"manifest.shard-0-of-3.json.bak", "manifest.shard-x-of-3.json", "manifest.shard-0-of-3-of-4.json",
+                            "manifest.shard--of-3.json", "manifest.shard-.json"}) {
+    std::ofstream(dir / "set" / decoy) << "{}";
+  }
   EXPECT_EQ(message(), "(merged)");
   fs::remove_all(dir);
 }

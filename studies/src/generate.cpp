@@ -545,20 +545,19 @@ std::optional<ShardName> shard_name(const fs::path& file) {
   rest = rest.substr(prefix.size(), rest.size() - prefix.size() - suffix.size());
   const std::size_t of = rest.find(middle);
   if (of == std::string_view::npos) return std::nullopt;
-  const auto number = [&](std::string_view digits) -> std::optional<std::uint64_t> {
-    if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
-      return std::nullopt;
-    }
-    std::uint64_t value = 0;
-    if (std::from_chars(digits.data(), digits.data() + digits.size(), value).ec != std::errc{}) {
+  const std::string_view i = rest.substr(0, of), n = rest.substr(of + middle.size());
+  const auto digits = [](std::string_view text) {
+    return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  if (!digits(i) || !digits(n)) return std::nullopt;
+  ShardName shard;
+  for (const auto& [text, value] : {std::pair{i, &shard.i}, std::pair{n, &shard.n}}) {
+    if (std::from_chars(text.data(), text.data() + text.size(), *value).ec != std::errc{}) {
       throw std::runtime_error(file.string() + ": a shard number beyond " +
                                std::to_string(std::numeric_limits<std::uint64_t>::max()));
     }
-    return value;
-  };
-  const std::optional<std::uint64_t> i = number(rest.substr(0, of)), n = number(rest.substr(of + middle.size()));
-  if (!i || !n) return std::nullopt;
-  return ShardName{*i, *n};
+  }
+  return shard;
 }
 
 }  // namespace

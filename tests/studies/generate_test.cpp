@@ -415,7 +415,8 @@ TEST(Generate, MergeRefusesWhatIsNotTheShardsOfOneSet) {
       << message();
   fs::remove(dir / "set" / "manifest.shard-0-of-18446744073709551616.json");
   for (const char* decoy : {"manifest.shard-0-of-3.json.bak", "manifest.shard-x-of-3.json", "manifest.shard-0-of-3-of-4.json",
-                            "manifest.shard--of-3.json", "manifest.shard-.json"}) {
+                            "manifest.shard--of-3.json", "manifest.shard-.json",
+                            "manifest.shard-18446744073709551616-of-x.json"}) {
     std::ofstream(dir / "set" / decoy) << "{}";
   }
   EXPECT_EQ(message(), "(merged)");

@@ -530,12 +530,10 @@ GenerateOutcome generate(const GeneratePlan& plan, const GenerateHooks& hooks) {
 
 namespace {
 
-// A shard manifest's name, manifest.shard-I-of-N.json, as (I, N); nothing
-// for any other name. I and N beyond 2^64 - 1 are refused, naming the file.
-struct ShardName {
-  std::uint64_t i = 0, n = 0;
-};
-std::optional<ShardName> shard_name(const fs::path& file) {
+// The shard whose manifest `file` is (manifest_file_name's
+// manifest.shard-I-of-N.json, leading zeros allowed); nothing for any other
+// name. I and N beyond 2^64 - 1 are refused, naming the file.
+std::optional<Shard> shard_of_manifest(const fs::path& file) {
   constexpr std::string_view prefix = "manifest.shard-", middle = "-of-", suffix = ".json";
   const std::string name = file.filename().string();
   std::string_view rest = name;
@@ -550,8 +548,8 @@ std::optional<ShardName> shard_name(const fs::path& file) {
     return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
   };
   if (!digits(i) || !digits(n)) return std::nullopt;
-  ShardName shard;
-  for (const auto& [text, value] : {std::pair{i, &shard.i}, std::pair{n, &shard.n}}) {
+  Shard shard;
+  for (const auto& [text, value] : {std::pair{i, &shard.index}, std::pair{n, &shard.count}}) {
     if (std::from_chars(text.data(), text.data() + text.size(), *value).ec != std::errc{}) {
       throw std::runtime_error(file.string() + ": a shard number beyond " +
                                std::to_string(std::numeric_limits<std::uint64_t>::max()));
@@ -566,7 +564,7 @@ MergeOutcome merge_shards(const fs::path& dir) {
   std::map<std::uint64_t, std::map<std::uint64_t, fs::path>> splits;  // N -> i -> file
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
-    if (const std::optional<ShardName> shard = shard_name(e.path())) splits[shard->n][shard->i] = e.path();
+    if (const std::optional<Shard> shard = shard_of_manifest(e.path())) splits[shard->count][shard->index] = e.path();
   }
   if (ec) throw std::runtime_error(dir.string() + ": cannot list: " + ec.message());
   if (splits.empty()) {
